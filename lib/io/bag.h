@@ -1,0 +1,117 @@
+#pragma once
+// RealSense ROS1 bag layout (as librealsense's recorder writes it): reading the depth stream,
+// its intrinsics, depth units, recorded options and device info; and writing the same layout.
+// Frames are streamed one at a time so memory stays flat however long the bag.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "camera/depth_frame.h"
+#include "camera/intrinsics.h"
+
+namespace depthbias::io {
+
+// Every failure to read or write a bag. what() is one line naming the file and what is wrong.
+class BagError : public std::runtime_error {
+ public:
+  enum class Kind {
+    kNotFound,       // no such path
+    kNotAFile,       // a directory or other non-regular file
+    kEmpty,          // zero-length file
+    kNotABag,        // not a ROS1 bag
+    kTruncated,      // ends in the middle of a record or chunk
+    kCorrupt,        // a chunk or record that cannot be decoded
+    kNoDepthStream,  // a bag without a depth stream
+    kBadEncoding,    // depth stream in another encoding than 16-bit depth
+    kWrite,          // could not write
+  };
+  BagError(Kind kind, const std::string& file, const std::string& what);
+  Kind kind() const { return kind_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  Kind kind_;
+  std::string file_;
+};
+
+// One recorded stream (depth, color, infrared, IMU, ...).
+struct StreamInfo {
+  std::string topic;        // e.g. /device_0/sensor_0/Depth_0/image/data
+  int sensor_index = -1;    // n in /device_0/sensor_<n>
+  std::string stream_type;  // "Depth", "Color", "Infrared", "Accel", "Gyro", ...
+  int stream_index = 0;     // the number after the type (Depth_0)
+  std::string encoding;     // e.g. mono16, rgb8; empty for non-image streams
+  int width = 0;
+  int height = 0;
+  std::uint64_t messages = 0;
+};
+
+struct BagInfo {
+  std::string file;
+  bool compressed = false;            // LZ4 or BZ2 chunks
+  std::vector<StreamInfo> streams;
+  StreamInfo depth;                   // the depth stream
+  camera::Intrinsics depth_intrinsics;
+  double depth_units_m = 0.001;       // Depth_Units option, or the first frame's own units
+  std::uint64_t depth_frames = 0;
+  double first_timestamp_ms = 0.0;
+  double last_timestamp_ms = 0.0;
+  std::map<std::string, double> options;       // depth sensor's recorded options, as recorded
+  std::map<std::string, std::string> device;   // "Name", "Serial Number", "Firmware Version", ...
+};
+
+struct ReadOptions {
+  bool allow_partial = false;  // on damage, stop at the last good frame instead of throwing
+};
+
+class BagReader {
+ public:
+  // Opens the bag and reads its index, streams, intrinsics, options and device info.
+  // Throws BagError.
+  explicit BagReader(const std::string& path, ReadOptions options = {});
+  ~BagReader();
+  BagReader(const BagReader&) = delete;
+  BagReader& operator=(const BagReader&) = delete;
+
+  const BagInfo& info() const;
+
+  // Next depth frame in time order; false at the end. Throws BagError on damage unless
+  // allow_partial, in which case it returns false and damage() says what was wrong.
+  bool Next(camera::DepthFrame* frame);
+  const std::string& damage() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct BagWriterConfig {
+  camera::Intrinsics intrinsics = camera::D455::DepthIntrinsics();
+  double depth_units_m = 0.001;
+  double fps = 30.0;
+  bool compress_lz4 = false;                  // the D455 records uncompressed by default
+  std::map<std::string, double> options;      // e.g. Visual_Preset, Emitter_Enabled
+  std::map<std::string, std::string> device;  // Name, Serial Number, Firmware Version
+};
+
+// Writes a depth-only bag in the layout librealsense's recorder writes and its playback reads.
+class BagWriter {
+ public:
+  BagWriter(const std::string& path, BagWriterConfig config);  // throws BagError
+  ~BagWriter();
+  BagWriter(const BagWriter&) = delete;
+  BagWriter& operator=(const BagWriter&) = delete;
+
+  void Write(const camera::DepthFrame& frame);  // throws BagError
+  void Close();                                 // also called by the destructor
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace depthbias::io
