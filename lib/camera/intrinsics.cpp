@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <stdexcept>
 
 namespace depthbias::camera {
 namespace {
@@ -109,9 +108,6 @@ Eigen::Vector2d Project(const Intrinsics& in, const Eigen::Vector3d& point_m) {
 }
 
 Eigen::Vector2d PixelToNormalized(const Intrinsics& in, const Eigen::Vector2d& pixel) {
-  if (in.model == Distortion::kModifiedBrownConrady)
-    throw std::invalid_argument("cannot deproject from a forward-distorted (Modified Brown "
-                                "Conrady) image");
   const auto& c = in.coeffs;
   double x = (pixel.x() - in.ppx) / in.fx;
   double y = (pixel.y() - in.ppy) / in.fy;

@@ -56,9 +56,15 @@ bool IsDistortionZero(const Intrinsics& intrinsics);
 Eigen::Vector2d Project(const Intrinsics& intrinsics, const Eigen::Vector3d& point_m);
 
 // rs2_deproject_pixel_to_point: pixel [px] and depth Z [m] → camera-frame point [m].
-// Throws std::invalid_argument for MODIFIED_BROWN_CONRADY, which librealsense cannot deproject.
+// MODIFIED_BROWN_CONRADY has no inverse: librealsense asserts in debug builds and, in the release
+// builds users run, deprojects it as undistorted; this does the same (see IsDeprojectable).
 Eigen::Vector3d Deproject(const Intrinsics& intrinsics, const Eigen::Vector2d& pixel,
                           double depth_m);
+
+// False for MODIFIED_BROWN_CONRADY (distortion applied on projection, no closed-form inverse).
+inline bool IsDeprojectable(const Intrinsics& intrinsics) {
+  return intrinsics.model != Distortion::kModifiedBrownConrady;
+}
 
 // Normalized ray (x/z, y/z) of a pixel: Deproject at Z = 1 without the z component.
 Eigen::Vector2d PixelToNormalized(const Intrinsics& intrinsics, const Eigen::Vector2d& pixel);

@@ -20,10 +20,13 @@ TEST(Camera, DisparityDepthAreInverse) {
   EXPECT_NEAR(DepthFromDisparity(d, 640.0, 0.095), 4.0, 1e-12);
 }
 
-TEST(Camera, ModifiedBrownConradyCannotBeDeprojected) {
+TEST(Camera, ModifiedBrownConradyDeprojectsAsUndistortedLikeLibrealsense) {
   Intrinsics in = D455::DepthIntrinsics();
   in.model = Distortion::kModifiedBrownConrady;
-  EXPECT_THROW(Deproject(in, {1, 1}, 1.0), std::invalid_argument);
+  in.coeffs = {-0.2, 0.05, 0.001, 0.001, 0.0};
+  EXPECT_FALSE(IsDeprojectable(in));
+  const Eigen::Vector3d p = Deproject(in, {0, 0}, 2.0);
+  EXPECT_NEAR(p.x(), 2.0 * (0 - in.ppx) / in.fx, 1e-12);
 }
 
 TEST(Camera, ParsesDistortionNames) {
