@@ -36,11 +36,10 @@ def run(bin_dir, path, model, loss):
     table = {}
     for line in out.splitlines()[2:]:
         f = line.split()
-        if len(f) < 9 or not re.match(r"^\d+$", f[2]):
+        if len(f) < 8 or not re.match(r"^\d+$", f[1]):
             continue
-        table[f[0] + "/" + f[1]] = dict(rmse=float(f[3]), mae=float(f[4]), lotpo=float(f[5]),
-                                        lotpo_mae=float(f[6]), lodo=float(f[7]),
-                                        lodo_mae=float(f[8]))
+        table[f[0]] = dict(rmse=float(f[2]), mae=float(f[3]), lotpo=float(f[4]),
+                           lotpo_mae=float(f[5]), lodo=float(f[6]), lodo_mae=float(f[7]))
     return table, seconds
 
 

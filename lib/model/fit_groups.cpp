@@ -91,8 +91,7 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
                 params.fit.loss_scale_m, params.fit.lambda, report.rows_used,
                 report.rows_skipped, report.seconds);
   out += buf;
-  std::snprintf(buf, sizeof(buf), "%-10s %-7s %3s %8s %8s", "light", "preset", "n", "rmse_m",
-                "mae_m");
+  std::snprintf(buf, sizeof(buf), "%-20s %3s %8s %8s", "group", "n", "rmse_m", "mae_m");
   out += buf;
   for (CvScheme s : params.cv) {
     if (s == CvScheme::kNone) continue;
@@ -107,8 +106,8 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
   }
   out += "  weights\n";
   for (const auto& g : report.groups) {
-    std::snprintf(buf, sizeof(buf), "%-10s %-7s %3d %8.3f %8.3f", g.group.light.c_str(),
-                  g.group.preset.c_str(), g.fit.n, g.fit.rmse_m, g.fit.mae_m);
+    std::snprintf(buf, sizeof(buf), "%-20s %3d %8.3f %8.3f", g.group.Label().c_str(), g.fit.n,
+                  g.fit.rmse_m, g.fit.mae_m);
     out += buf;
     for (const auto& cv : g.cv) {
       std::snprintf(buf, sizeof(buf), " %14.3f %13.3f", cv.rmse_m, cv.mae_m);
