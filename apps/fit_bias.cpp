@@ -6,6 +6,7 @@
 //            [--nested] [--cv-out heldout.csv]
 // --nested also judges the choice of a model out of sample: every form × {none, huber} is a
 // candidate, chosen in each outer fold by inner cross-validation on that fold's training rows.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -109,6 +110,7 @@ int main(int argc, char** argv) {
   const model::FitReport report = model::FitGroups(rows, params);
   if (!report.success) return Fail(in + ": " + report.message);
 
+  for (const auto& w : report.warnings) std::cerr << "fit_bias: warning: " << w << "\n";
   camera::BiasWeights weights = model::ToWeights(report, params);
   weights.input_file = in;
   weights.input_sha256 = sha;
@@ -130,7 +132,7 @@ int main(int argc, char** argv) {
           cells.push_back({r.bag, g.group.Label(), model::CvSchemeName(cv.scheme),
                            io::CsvNumber(r.distance_m), io::CsvNumber(r.angle_deg), r.emitter,
                            io::CsvNumber(r.median_m - r.distance_m),
-                           io::CsvNumber(cv.errors_m[i])});
+                           io::CsvNumber(i < cv.errors_m.size() ? cv.errors_m[i] : NAN)});
         }
       }
     }

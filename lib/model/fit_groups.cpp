@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <map>
 
 namespace depthbias::model {
@@ -44,9 +45,9 @@ FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
       if (s == CvScheme::kNone) continue;
       gr.cv.push_back(CrossValidate(samples, params.fit, s));
       if (!gr.cv.back().success) {
-        report.message = "group " + g.Label() + ": " + CvSchemeName(s) +
-                         " cross-validation: " + gr.cv.back().message;
-        return report;
+        gr.cv.back().rmse_m = gr.cv.back().mae_m = std::numeric_limits<double>::quiet_NaN();
+        report.warnings.push_back("group " + g.Label() + ": no " + CvSchemeName(s) +
+                                  " cross-validation: " + gr.cv.back().message);
       }
     }
     if (!params.nested_candidates.empty() && !params.cv.empty() &&
@@ -54,9 +55,9 @@ FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
       gr.nested = NestedCrossValidate(samples, params.nested_candidates, params.cv.front(),
                                       &gr.nested_chosen);
       if (!gr.nested.success) {
-        report.message = "group " + g.Label() + ": nested cross-validation: " +
-                         gr.nested.message;
-        return report;
+        gr.nested.rmse_m = std::numeric_limits<double>::quiet_NaN();
+        report.warnings.push_back("group " + g.Label() + ": no nested cross-validation: " +
+                                  gr.nested.message);
       }
     }
     report.groups.push_back(std::move(gr));

@@ -36,13 +36,16 @@ struct GroupReport {
 struct FitReport {
   bool success = false;
   std::string message;       // the first group that failed and why
+  std::vector<std::string> warnings;  // cross-validations that could not run (fit still done)
   std::vector<GroupReport> groups;
   int rows_used = 0;
   int rows_skipped = 0;      // rows whose status is not "ok"
   double seconds = 0.0;      // wall time of fits and cross-validation
 };
 
-// Fits every group; fails (success = false) if there is no "ok" row or any group fails.
+// Fits every group; fails (success = false) if there is no "ok" row or any group's fit fails.
+// A cross-validation the design cannot support (e.g. leave-one-distance-out with two
+// distances) does not fail the run: its result says why and a warning names it.
 FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows, const FitGroupsParams& params);
 
 // Every form × {none, huber} with the fit's other settings: the candidates of a nested check.

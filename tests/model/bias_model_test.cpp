@@ -122,5 +122,19 @@ TEST(FitGroups, GroupWithTooFewRowsFailsNamingIt) {
   EXPECT_NE(r.message.find("daylight/HD"), std::string::npos) << r.message;
 }
 
+TEST(FitGroups, CrossValidationTheDesignCannotSupportIsAWarning) {
+  std::vector<camera::PanelMetrics> rows;
+  for (const auto& r : Rows()) {
+    if (r.distance_m <= 8) rows.push_back(r);  // two distances: one left out leaves one
+  }
+  FitGroupsParams p;
+  const FitReport r = FitGroups(rows, p);
+  ASSERT_TRUE(r.success) << r.message;
+  ASSERT_EQ(r.warnings.size(), 2u);  // one per group
+  EXPECT_NE(r.warnings[0].find("distance cross-validation"), std::string::npos) << r.warnings[0];
+  EXPECT_TRUE(r.groups[0].cv[0].success);  // leave one point out still runs
+  EXPECT_TRUE(std::isnan(r.groups[0].cv[1].rmse_m));
+}
+
 }  // namespace
 }  // namespace depthbias::model
