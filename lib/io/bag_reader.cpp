@@ -502,6 +502,8 @@ struct BagReader::Impl {
       if (!options.allow_partial) throw;
       damage = e.what();
       finished = info.indexed;  // damage before the first frame of an indexed bag: nothing to read
+      if (!info.indexed) ChooseDepth();
+      if (!has_depth || (info.indexed && !first_seen)) throw;  // nothing readable before it
     }
     if (!has_depth) ChooseDepth();
     BuildInfo(first_seen);

@@ -87,6 +87,7 @@ constexpr char kStreamInfoDefinition[] =
     "string encoding   # Stream's data format\n"
     "bool is_recommended # Is this stream recommended by RealSense SDK\n";
 constexpr std::uint32_t kFileVersion = 4;
+constexpr std::uint64_t kFirstFrameNs = 1000000;
 
 template <typename M>
 RawMessage Typed() {
@@ -268,9 +269,12 @@ void BagWriter::Write(const camera::DepthFrame& frame) {
     d.first_ms = frame.timestamp_ms;
     d.have_first = true;
   }
-  // Record time: time since the first frame, as librealsense's recorder stamps it.
+  // Record time: time since the start of the recording, as librealsense's recorder stamps it.
+  // librealsense's playback skips frames stamped at the time of the static information (1 ns),
+  // so frames start 1 ms after it.
   const double elapsed_ns = std::max(0.0, (frame.timestamp_ms - d.first_ms) * 1e6);
-  const std::uint64_t t = std::max<std::uint64_t>(d.last_ns, 1 + static_cast<std::uint64_t>(elapsed_ns));
+  const std::uint64_t t =
+      std::max<std::uint64_t>(d.last_ns, kFirstFrameNs + static_cast<std::uint64_t>(elapsed_ns));
   d.last_ns = t;
 
   RawMessage image = Typed<sensor_msgs::Image>();
