@@ -72,6 +72,11 @@ struct BagInfo {
   std::map<std::string, std::string> device;   // "Name", "Serial Number", "Firmware Version", ...
 };
 
+// Short name of a D455 Visual_Preset value (rs2_rs400_visual_preset): 3 → "HA" (High
+// Accuracy), 4 → "HD" (High Density), 0 Custom, 1 Default, 2 Hand, 5 Medium Density,
+// 6 Remove IR Pattern; "preset <n>" for any other value.
+std::string PresetName(double visual_preset);
+
 struct ReadOptions {
   bool allow_partial = false;  // on damage, stop at the last good frame instead of throwing
 };
@@ -87,7 +92,7 @@ class BagReader {
 
   const BagInfo& info() const;
 
-  // Next depth frame in time order; false at the end. Throws BagError on damage unless
+  // Next depth frame in recorded order; false at the end. Throws BagError on damage unless
   // allow_partial, in which case it returns false and damage() says what was wrong.
   bool Next(camera::DepthFrame* frame);
   const std::string& damage() const;

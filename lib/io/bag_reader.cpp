@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <sstream>
 #include <tuple>
 
 #include "io/bag.h"
@@ -80,6 +81,7 @@ struct BagReader::Impl {
   bool has_depth = false;
   std::uint32_t depth_conn = 0;
   double fallback_units_m = 0.001;
+  bool first_frame_has_units = false;
   std::string damage;
   Cursor cursor;
   bool finished = false;
@@ -517,8 +519,8 @@ struct BagReader::Impl {
     if (info.depth.encoding.empty()) info.depth.encoding = v.encoding;
     info.depth.width = static_cast<int>(v.width);
     info.depth.height = static_cast<int>(v.height);
-    if (v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0)
-      info.depth_units_m = v.depth_units;
+    first_frame_has_units = v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0;
+    if (first_frame_has_units) info.depth_units_m = v.depth_units;
   }
 
   void LastFrame() {
@@ -600,7 +602,7 @@ struct BagReader::Impl {
     const auto units = info.options.find("Depth_Units");
     if (units != info.options.end() && std::isfinite(units->second) && units->second > 0)
       fallback_units_m = units->second;
-    if (!first_seen) info.depth_units_m = fallback_units_m;
+    if (!first_seen || !first_frame_has_units) info.depth_units_m = fallback_units_m;
     const StreamKey key{sensor, t.stream_type, t.stream_index};
     if (camera_infos.count(key)) {
       const CameraInfoView& ci = camera_infos[key];
@@ -658,6 +660,17 @@ struct BagReader::Impl {
       for (auto& c : frame->counts) c = static_cast<std::uint16_t>((c >> 8) | (c << 8));
   }
 };
+
+std::string PresetName(double visual_preset) {
+  static const char* const kNames[] = {"Custom", "Default", "Hand", "HA",
+                                       "HD", "Medium Density", "Remove IR Pattern"};
+  const double rounded = std::round(visual_preset);
+  if (rounded == visual_preset && rounded >= 0 && rounded <= 6)
+    return kNames[static_cast<int>(rounded)];
+  std::ostringstream name;
+  name << "preset " << visual_preset;
+  return name.str();
+}
 
 BagReader::BagReader(const std::string& path, ReadOptions options) : impl_(new Impl) {
   impl_->path = path;

@@ -3,11 +3,15 @@
 // round trips through BagWriter, and damaged or wrong input of every kind.
 
 #include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/Image.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -192,6 +196,44 @@ TEST(RecordedBagInfo, ListsEveryStreamWithItsFormat) {
   EXPECT_EQ(reader.info().sensor.at("Name"), "Stereo Module");
 }
 
+// rosbag_storage's own reader (rosbag::View) sees the same depth frames as BagReader.
+TEST_P(RecordedBag, AgreesWithRosbagStorage) {
+  const std::string path = FixturePath(GetParam());
+  BagReader reader(path);
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  rosbag::View view(bag, rosbag::TopicQuery(reader.info().depth.topic));
+  camera::DepthFrame frame;
+  std::size_t n = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    const sensor_msgs::Image::ConstPtr image = m.instantiate<sensor_msgs::Image>();
+    ASSERT_TRUE(image);
+    ASSERT_TRUE(reader.Next(&frame));
+    ++n;
+    EXPECT_EQ(frame.frame_number, image->header.seq);
+    EXPECT_NEAR(frame.timestamp_ms, image->header.stamp.toSec() * 1e3, 1e-3);
+    ASSERT_EQ(static_cast<std::uint32_t>(frame.width), image->width);
+    ASSERT_EQ(static_cast<std::uint32_t>(frame.height), image->height);
+    std::size_t differ = 0;
+    for (int v = 0; v < frame.height; ++v)
+      for (int u = 0; u < frame.width; ++u) {
+        const std::uint8_t* p = image->data.data() + v * image->step + 2 * u;
+        differ += frame.at(u, v) != static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+      }
+    EXPECT_EQ(differ, 0u);
+  }
+  EXPECT_GT(n, 0u);
+  EXPECT_EQ(n, reader.info().depth_frames);
+  EXPECT_FALSE(reader.Next(&frame));
+}
+
+TEST(PresetName, FollowsTheD455Numbering) {
+  EXPECT_EQ(PresetName(3), "HA");
+  EXPECT_EQ(PresetName(4), "HD");
+  EXPECT_EQ(PresetName(0), "Custom");
+  EXPECT_EQ(PresetName(9), "preset 9");
+  EXPECT_EQ(PresetName(3.5), "preset 3.5");
+}
+
 // ---------------------------------------------------------------- BagWriter round trips
 
 std::uint16_t Pixel(int u, int v, int i) {
@@ -277,6 +319,58 @@ TEST_P(WriterRoundTrip, ReadsBackEveryFrameAndSetting) {
 
 INSTANTIATE_TEST_SUITE_P(Compression, WriterRoundTrip, ::testing::Values(false, true),
                          [](const auto& p) { return p.param ? "lz4" : "none"; });
+
+TEST(BagWriter, BagsReadByRosbagStorage) {
+  TempDir dir;
+  for (bool lz4 : {false, true}) {
+    const std::string path = WriteTestBag(dir.File("w.bag"), 64, 48, 4, lz4, 0.001);
+    rosbag::Bag bag(path, rosbag::bagmode::Read);
+    rosbag::View view(bag, rosbag::TopicQuery("/device_0/sensor_0/Depth_0/image/data"));
+    int i = 0;
+    for (const rosbag::MessageInstance& m : view) {
+      const sensor_msgs::Image::ConstPtr image = m.instantiate<sensor_msgs::Image>();
+      ASSERT_TRUE(image);
+      EXPECT_EQ(image->encoding, "mono16");
+      EXPECT_EQ(image->header.frame_id, "1");
+      const camera::DepthFrame want = TestFrame(64, 48, i, 0.001);
+      ASSERT_EQ(image->data.size(), want.counts.size() * 2);
+      EXPECT_EQ(std::memcmp(image->data.data(), want.counts.data(), image->data.size()), 0);
+      ++i;
+    }
+    EXPECT_EQ(i, 4);
+  }
+}
+
+// Bags from before librealsense put depth units in each frame: the Depth_Units option is used.
+TEST(BagWriter, FramesWithoutTheirOwnUnitsUseTheDepthUnitsOption) {
+  TempDir dir;
+  const std::string path = dir.File("w.bag");
+  {
+    BagWriter writer(path, TestConfig(64, 48, false, 0.001));  // Depth_Units option: 0.001
+    for (int i = 0; i < 3; ++i) writer.Write(TestFrame(64, 48, i, 0.0001));  // frames: 0.0001
+  }
+  {
+    BagReader reader(path);
+    camera::DepthFrame f;
+    ASSERT_TRUE(reader.Next(&f));
+    EXPECT_EQ(f.depth_units_m, static_cast<double>(0.0001f));  // the frame's own units win
+  }
+  std::string bytes = ReadBytes(path);
+  // header.frame_id "1" (after seq and stamp) marks the units float: make it "0".
+  const std::string marked("\x01\x00\x00\x00" "1" "\x30\x00\x00\x00", 9);  // then height 48
+  ASSERT_EQ(Replace(&bytes, marked, std::string("\x01\x00\x00\x00" "0" "\x30\x00\x00\x00", 9)),
+            3u);
+  WriteBytes(path, bytes);
+  BagReader reader(path);
+  EXPECT_EQ(reader.info().depth_units_m, static_cast<double>(0.001f));
+  camera::DepthFrame f;
+  int n = 0;
+  for (; reader.Next(&f); ++n) {
+    EXPECT_EQ(f.depth_units_m, static_cast<double>(0.001f));
+    EXPECT_EQ(f.counts, TestFrame(64, 48, n, 0.0001).counts);
+  }
+  EXPECT_EQ(n, 3);
+}
 
 TEST(BagWriter, RefusesFramesOfAnotherSizeAndBadConfig) {
   TempDir dir;
