@@ -315,6 +315,11 @@ struct BagReader::Impl {
                  " bytes present)");
       const std::size_t stored = cut ? static_cast<std::size_t>(file_size - data_offset)
                                      : static_cast<std::size_t>(data_size);
+      // LZ4 expands at most ~255 times: a larger claim is a damaged size field.
+      if (compression == "lz4" && plain_size > 255ull * stored + 65536)
+        Fail(BagError::Kind::kCorrupt, "chunk at " + At(offset) + " claims " +
+                                           std::to_string(plain_size) + " bytes from " +
+                                           std::to_string(stored) + " compressed");
       if (plain_size > kMaxChunkBytes)
         Fail(BagError::Kind::kCorrupt, "chunk at " + At(offset) + " claims " +
                                            std::to_string(plain_size) + " bytes");
