@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
 #include "io/weights_yaml.h"
@@ -44,6 +45,9 @@ int main(int argc, char** argv) {
   }
   if (weights_path.empty() || in.empty() || out.empty()) {
     return Fail("usage: correct_depth --weights w.yaml --in metrics.csv --out corrected.csv");
+  }
+  if (io::SameFile(in, out) || io::SameFile(weights_path, out)) {
+    return Fail(out + ": the output would overwrite an input");
   }
   std::vector<camera::PanelMetrics> rows;
   camera::BiasWeights weights;

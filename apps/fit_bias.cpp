@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
 #include "io/sha256.h"
@@ -95,6 +96,7 @@ int main(int argc, char** argv) {
     return Fail(std::string("bad arguments: ") + e.what());
   }
   if (in.empty() || out.empty()) return Fail("usage: fit_bias --in metrics.csv --out w.yaml");
+  if (io::SameFile(in, out)) return Fail(out + ": the output would overwrite the input");
   if (nested) params.nested_candidates = model::DefaultCandidates(params.fit);
   std::string why;
   if (!params.IsValid(&why)) return Fail(why);

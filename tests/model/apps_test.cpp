@@ -161,6 +161,11 @@ TEST(FitBiasApp, BadInputsFailCleanlyWithoutOutput) {
   ExpectCleanFailure(Exec("fit_bias", "--in " + kArticle + " --out " + out.string() +
                                           " --model cubic", dir),
                      out, "unknown model 'cubic'");
+  Write(dir / "copy.csv", io::ReadFile(kArticle));
+  const AppRun same = Exec("fit_bias", "--in " + (dir / "copy.csv").string() + " --out " +
+                                        (dir / "copy.csv").string(), dir);
+  EXPECT_NE(same.code, 0);
+  EXPECT_EQ(io::ReadFile((dir / "copy.csv").string()), io::ReadFile(kArticle));  // untouched
   ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "none.csv").string() + " --out " +
                                           out.string(), dir),
                      out, "none.csv");
