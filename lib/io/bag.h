@@ -109,6 +109,8 @@ struct BagWriterConfig {
   bool compress_lz4 = false;                  // the D455 records uncompressed by default
   std::map<std::string, double> options;      // e.g. Visual_Preset, Emitter_Enabled
   std::map<std::string, std::string> device;  // Name, Serial Number, Firmware Version
+
+  bool IsValid(std::string* why) const;
 };
 
 // Writes a depth-only bag in the layout librealsense's recorder writes and its playback reads.

@@ -109,7 +109,7 @@ struct BagReader::Impl {
       if (n < 0 && errno == EINTR) continue;
       if (n < 0) Fail(BagError::Kind::kCorrupt, "read error at " + At(offset) + ": " +
                                                     std::strerror(errno));
-      if (n == 0) Fail(BagError::Kind::kTruncated, "ends early at " + At(offset + done));
+      if (n == 0) Fail(BagError::Kind::kTruncated, "truncated: ends early at " + At(offset + done));
       done += static_cast<std::size_t>(n);
     }
   }
@@ -117,8 +117,8 @@ struct BagReader::Impl {
   // Reads the header of the top-level record at offset. Returns its data offset and size.
   RecordHeader ReadRecordHeader(std::uint64_t offset, std::uint64_t* data_offset,
                                 std::uint32_t* data_size) const {
-    if (offset + 4 > file_size) Fail(BagError::Kind::kTruncated, "ends inside the record at " +
-                                                                     At(offset));
+    if (offset + 4 > file_size)
+      Fail(BagError::Kind::kTruncated, "truncated: ends inside the record at " + At(offset));
     std::uint8_t b4[4];
     ReadAt(offset, 4, b4);
     const std::uint32_t header_size = ByteReader(b4, 4).U32();
@@ -126,7 +126,7 @@ struct BagReader::Impl {
       Fail(BagError::Kind::kCorrupt, "record at " + At(offset) + " has a header of " +
                                          std::to_string(header_size) + " bytes");
     if (offset + 8 + header_size > file_size)
-      Fail(BagError::Kind::kTruncated, "ends inside the record at " + At(offset));
+      Fail(BagError::Kind::kTruncated, "truncated: ends inside the record at " + At(offset));
     std::vector<std::uint8_t> h(header_size + 4);
     ReadAt(offset + 4, h.size(), h.data());
     RecordHeader header;
@@ -152,10 +152,12 @@ struct BagReader::Impl {
     file_size = static_cast<std::uint64_t>(st.st_size);
     if (file_size == 0) Fail(BagError::Kind::kEmpty, "is empty (0 bytes)");
     fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) Fail(BagError::Kind::kNotFound, std::string("cannot open: ") + std::strerror(errno));
+    if (fd < 0)
+      Fail(BagError::Kind::kNotFound, std::string("cannot open: ") + std::strerror(errno));
 
     char magic[kMagicSize] = {};
-    const std::size_t head = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMagicSize));
+    const std::size_t head =
+        static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMagicSize));
     ReadAt(0, head, reinterpret_cast<std::uint8_t*>(magic));
     if (head < kMagicSize || std::memcmp(magic, kMagic, kMagicSize) != 0) {
       if (head >= 9 && std::memcmp(magic, "#ROSBAG V", 9) == 0)
@@ -179,7 +181,8 @@ struct BagReader::Impl {
       Fail(BagError::Kind::kCorrupt, std::string("bag header: ") + e.what());
     }
     first_record = data_offset + data_size;
-    if (first_record > file_size) Fail(BagError::Kind::kTruncated, "ends inside its bag header");
+    if (first_record > file_size)
+      Fail(BagError::Kind::kTruncated, "truncated: ends inside its bag header");
 
     std::string index_problem;
     BagError::Kind index_kind = BagError::Kind::kTruncated;
@@ -243,7 +246,8 @@ struct BagReader::Impl {
       } else if (op == kOpChunkInfo) {
         const std::uint64_t pos = h.U64("chunk_pos");
         const std::uint32_t n = h.U32("count");
-        if (pos < first_record || pos >= index_pos) throw FormatError("chunk position out of range");
+        if (pos < first_record || pos >= index_pos)
+          throw FormatError("chunk position out of range");
         ByteReader d(data, data_size);
         auto& counts = chunk_counts[pos];
         for (std::uint32_t i = 0; i < n; ++i) {
@@ -274,9 +278,10 @@ struct BagReader::Impl {
       if (data_offset + data_size > file_size) {
         const bool chunk = h.Op() == kOpChunk;
         Fail(BagError::Kind::kTruncated,
-             std::string("ends in the middle of ") + (chunk ? "the chunk" : "the record") +
-                 " at " + At(offset) + " (" + std::to_string(file_size - data_offset) + " of " +
-                 std::to_string(data_size) + " bytes present)");
+             std::string("truncated: ends in the middle of ") +
+                 (chunk ? "the chunk" : "the record") + " at " + At(offset) + " (" +
+                 std::to_string(file_size - data_offset) + " of " + std::to_string(data_size) +
+                 " bytes present)");
       }
       offset = data_offset + data_size;
     }
@@ -304,13 +309,15 @@ struct BagReader::Impl {
       const std::uint64_t end = data_offset + data_size;
       const bool cut = end > file_size;
       if (op != kOpChunk) {
-        if (cut) Fail(BagError::Kind::kTruncated, "ends in the middle of the record at " + At(offset));
+        if (cut)
+          Fail(BagError::Kind::kTruncated,
+               "truncated: ends in the middle of the record at " + At(offset));
         c->next_record = end;
         continue;
       }
       if (cut && !(options.allow_partial && compression == "none"))
         Fail(BagError::Kind::kTruncated,
-             "ends in the middle of the chunk at " + At(offset) + " (" +
+             "truncated: ends in the middle of the chunk at " + At(offset) + " (" +
                  std::to_string(file_size - data_offset) + " of " + std::to_string(data_size) +
                  " bytes present)");
       const std::size_t stored = cut ? static_cast<std::size_t>(file_size - data_offset)
@@ -369,8 +376,9 @@ struct BagReader::Impl {
   bool NextInChunk(Cursor* c, Message* m) {
     auto damaged = [&](const std::string& what) {
       if (c->cut)
-        Fail(BagError::Kind::kTruncated,
-             "ends in the middle of the chunk at " + At(c->chunk_pos) + " (" + what + ")");
+        Fail(BagError::Kind::kTruncated, "truncated: ends in the middle of the chunk at " +
+                                             At(c->chunk_pos) + ", inside its record at offset " +
+                                             std::to_string(c->pos));
       Fail(BagError::Kind::kCorrupt, "chunk at " + At(c->chunk_pos) + ": " + what);
     };
     while (c->pos < c->size) {
@@ -434,9 +442,9 @@ struct BagReader::Impl {
   void ChooseDepth() {
     for (const auto& [id, c] : conns) {
       if (!IsDepthImage(c)) continue;
-      if (!has_depth ||
-          std::make_pair(c.parts.sensor, c.parts.stream_index) <
-              std::make_pair(conns[depth_conn].parts.sensor, conns[depth_conn].parts.stream_index)) {
+      const TopicParts& best = conns[depth_conn].parts;
+      if (!has_depth || std::make_pair(c.parts.sensor, c.parts.stream_index) <
+                            std::make_pair(best.sensor, best.stream_index)) {
         has_depth = true;
         depth_conn = id;
       }
@@ -446,7 +454,9 @@ struct BagReader::Impl {
   void ProcessMetadata(const Connection& c, const Message& m) {
     const TopicParts& t = c.parts;
     ByteReader r(m.data, m.size);
-    if (t.device >= 0 && t.sensor < 0 && c.topic == "/device_" + std::to_string(t.device) + "/info") {
+    const bool device_info_topic =
+        t.device >= 0 && t.sensor < 0 && c.topic == "/device_" + std::to_string(t.device) + "/info";
+    if (device_info_topic) {
       std::string key = r.String();
       device_info[t.device][key] = r.String();
     } else if (t.sensor >= 0 && !t.option.empty()) {
@@ -520,8 +530,7 @@ struct BagReader::Impl {
   void FirstFrame(const Message& m) {
     const ImageView v = DecodeImage(m.data, m.size);
     info.first_timestamp_ms = info.last_timestamp_ms = v.stamp_ms;
-    if (!info.depth.encoding.empty() && info.depth.encoding != v.encoding) info.depth.encoding.clear();
-    if (info.depth.encoding.empty()) info.depth.encoding = v.encoding;
+    info.depth.encoding = v.encoding;  // the frames' own encoding wins over the stream info
     info.depth.width = static_cast<int>(v.width);
     info.depth.height = static_cast<int>(v.height);
     first_frame_has_units = v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0;

@@ -82,7 +82,8 @@ BagError::Kind ExpectBagError(const std::string& path, ReadOptions options = {})
 
 std::size_t Replace(std::string* s, const std::string& from, const std::string& to) {
   std::size_t n = 0;
-  for (std::size_t at = s->find(from); at != std::string::npos; at = s->find(from, at + to.size())) {
+  for (std::size_t at = s->find(from); at != std::string::npos;
+       at = s->find(from, at + to.size())) {
     s->replace(at, from.size(), to);
     ++n;
   }
