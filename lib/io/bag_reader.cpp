@@ -1,11 +1,12 @@
 // Streaming reader of RealSense ROS1 bags. The bag's index (connections and per-chunk message
 // counts) is read at open; frames are then decoded one chunk at a time, so memory holds one
-// chunk (one or two frames) whatever the length of the recording. Chunks are LZ4-decompressed
-// with roslz4, the library rosbag_storage itself uses.
+// chunk (one or two frames) whatever the length of the recording. LZ4 chunks (roslz4's format,
+// which is the LZ4 frame format) are decompressed with liblz4's frame API, which checks them and
+// is faster than roslz4's own decoder; BZ2 chunks with libbz2.
 
 #include <bzlib.h>
 #include <fcntl.h>
-#include <roslz4/lz4s.h>
+#include <lz4frame.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -85,6 +86,7 @@ struct BagReader::Impl {
   std::string damage;
   Cursor cursor;
   bool finished = false;
+  LZ4F_dctx* lz4 = nullptr;
 
   // Recorded metadata, gathered before the first depth frame.
   std::map<int, std::map<std::string, std::string>> device_info;
@@ -96,6 +98,23 @@ struct BagReader::Impl {
 
   ~Impl() {
     if (fd >= 0) ::close(fd);
+    if (lz4) LZ4F_freeDecompressionContext(lz4);
+  }
+
+  // Decompresses one LZ4 frame; false on damaged data or a size other than expected.
+  bool Lz4(const std::uint8_t* in, std::size_t in_size, std::uint8_t* out, std::size_t out_size) {
+    if (!lz4 && LZ4F_isError(LZ4F_createDecompressionContext(&lz4, LZ4F_VERSION))) return false;
+    LZ4F_resetDecompressionContext(lz4);
+    std::size_t done_in = 0, done_out = 0;
+    for (;;) {
+      std::size_t dst = out_size - done_out, src = in_size - done_in;
+      const std::size_t rc = LZ4F_decompress(lz4, out + done_out, &dst, in + done_in, &src, nullptr);
+      if (LZ4F_isError(rc)) return false;
+      done_in += src;
+      done_out += dst;
+      if (rc == 0) return done_out == out_size;  // end of frame
+      if ((src == 0 && dst == 0) || done_in >= in_size) return false;  // stalled or cut short
+    }
   }
 
   [[noreturn]] void Fail(BagError::Kind kind, const std::string& what) const {
@@ -341,18 +360,17 @@ struct BagReader::Impl {
         if (c->raw.size() < stored) c->raw.resize(stored);
         ReadAt(data_offset, stored, c->raw.data());
         if (c->data.size() < plain_size) c->data.resize(plain_size);
-        unsigned int out_size = plain_size;
-        int rc;
+        bool ok;
         if (compression == "lz4") {
-          rc = roslz4_buffToBuffDecompress(reinterpret_cast<char*>(c->raw.data()),
-                                           static_cast<unsigned int>(stored),
-                                           reinterpret_cast<char*>(c->data.data()), &out_size);
+          ok = Lz4(c->raw.data(), stored, c->data.data(), plain_size);
         } else {
-          rc = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(c->data.data()), &out_size,
+          unsigned int out_size = plain_size;
+          ok = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(c->data.data()), &out_size,
                                           reinterpret_cast<char*>(c->raw.data()),
-                                          static_cast<unsigned int>(stored), 0, 0);
+                                          static_cast<unsigned int>(stored), 0, 0) == BZ_OK &&
+               out_size == plain_size;
         }
-        if (rc != 0 || out_size != plain_size)
+        if (!ok)
           Fail(BagError::Kind::kCorrupt, compression + " chunk at " + At(offset) +
                                              " does not decompress (damaged data)");
         c->size = plain_size;

@@ -50,8 +50,9 @@ class TempDir {
  public:
   TempDir() {
     const auto* t = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::path(::testing::TempDir()) /
-            ("depthbias_io_" + std::string(t->test_suite_name()) + "_" + t->name());
+    std::string name = "depthbias_io_" + std::string(t->test_suite_name()) + "_" + t->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    path_ = fs::path(::testing::TempDir()) / name;
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
