@@ -266,7 +266,7 @@ camera::DepthFrame TestFrame(int width, int height, int i, double units_m) {
   f.height = height;
   f.depth_units_m = units_m;
   f.frame_number = 1000 + i;
-  f.timestamp_ms = 1.7e12 + 33.36 * i;  // a wall-clock-sized device time
+  f.timestamp_ms = 5999.9999996 + 33.36 * i;  // the first rounds up to a whole second
   f.counts.resize(static_cast<std::size_t>(width) * height);
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) f.counts[v * width + u] = Pixel(u, v, i);
