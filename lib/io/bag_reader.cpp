@@ -614,6 +614,12 @@ struct BagReader::Impl {
       info.streams.push_back(s);
     }
     if (!has_depth) {
+      for (const auto& entry : stream_infos)
+        if (std::get<1>(entry.first) == "Depth")
+          Fail(BagError::Kind::kNoDepthStream,
+               "depth stream Depth_" + std::to_string(std::get<2>(entry.first)) +
+                   " of sensor " + std::to_string(std::get<0>(entry.first)) +
+                   " is declared but recorded no frames");
       std::string names;
       for (const auto& s : info.streams)
         names += (names.empty() ? "" : ", ") + s.stream_type + "_" + std::to_string(s.stream_index);

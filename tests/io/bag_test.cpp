@@ -523,6 +523,12 @@ TEST(BadInput, NoDepthStream) {
   }
 }
 
+TEST(BadInput, RecordingWithoutFrames) {
+  TempDir dir;
+  BagWriter(dir.File("empty_recording.bag"), TestConfig(64, 48, false, 0.001)).Close();
+  EXPECT_EQ(ExpectBagError(dir.File("empty_recording.bag")), Kind::kNoDepthStream);
+}
+
 TEST(BadInput, DepthStreamInAnotherEncoding) {
   TempDir dir;
   std::string bytes = ReadBytes(FixturePath("d455_depth_1mm.bag"));
