@@ -8,7 +8,7 @@ holes, like a real depth image), so both readers see the layout the camera write
 runs REPEAT times on a warm page cache; the best run counts. Also prints the peak resident memory
 of bag_info reading the whole bag (it should not grow with the bag's length).
 
-Usage: scripts/bench_bag_read.py [--bin build/apps] [--frames 300] [--repeat 3] [--keep DIR]
+Usage: scripts/bench_bag_read.py [--bin build/apps] [--frames 300] [--repeat 5] [--keep DIR]
 """
 import argparse
 import json
@@ -121,7 +121,7 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--bin", default=os.path.join(here, "..", "build", "apps"))
     ap.add_argument("--frames", type=int, default=300)
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--keep", help="folder to record into and keep (default: a temp folder)")
     args = ap.parse_args()
     work = args.keep or tempfile.mkdtemp(prefix="bench_bag_read_")
@@ -156,6 +156,8 @@ def main():
               (name, size / 1e6, f1, n1, f2, n2, f1 / f2, rss / 1024.0))
     print("frames/s over the whole read (open included), best of %d; (n) = frames delivered;"
           " ratio = depthbias / librealsense" % args.repeat)
+    print("machine: %d cores, load average %.1f %.1f %.1f (other work slows both readers)" %
+          ((os.cpu_count() or 0,) + tuple(os.getloadavg())))
     ok = all(n1 == n2 == args.frames for _, _, (n1, _), (n2, _), _ in rows)
     if not ok:
         print("warning: a reader did not deliver every frame", file=sys.stderr)
