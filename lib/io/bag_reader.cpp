@@ -15,7 +15,6 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
-#include <future>
 #include <tuple>
 
 #include "io/bag.h"
@@ -29,7 +28,6 @@ using namespace bag_detail;
 constexpr std::uint32_t kMaxRecordHeaderBytes = 1u << 20;  // real headers hold a few fields
 constexpr std::uint64_t kMaxChunkBytes = 1ull << 31;       // larger means a damaged size field
 constexpr std::uint64_t kMaxIndexBytes = 1ull << 30;
-constexpr std::size_t kReadAheadMinBytes = 256 * 1024;
 
 std::string OneLine(std::string s) {
   std::replace(s.begin(), s.end(), '\n', ' ');
@@ -59,9 +57,6 @@ struct BagReader::Impl {
     std::size_t size = 0;
   };
   // Position in the file and the decompressed chunk being read.
-  struct Lz4Free {
-    void operator()(LZ4F_dctx* c) const { LZ4F_freeDecompressionContext(c); }
-  };
   struct Cursor {
     std::uint64_t next_record = 0;
     std::uint64_t chunk_pos = 0;
@@ -71,9 +66,7 @@ struct BagReader::Impl {
     std::size_t pos = 0;
     bool loaded = false;
     bool cut = false;  // the chunk is cut short by the end of the file (partial read)
-    bool compressed = false;
     std::map<std::uint32_t, std::uint32_t> seen;
-    std::unique_ptr<LZ4F_dctx, Lz4Free> lz4;
   };
   using StreamKey = std::tuple<int, std::string, int>;  // sensor, type, index
 
@@ -93,10 +86,7 @@ struct BagReader::Impl {
   std::string damage;
   Cursor cursor;
   bool finished = false;
-  // Frames are read ahead: while the caller works on one chunk's frames, the next chunk is read
-  // and decompressed on another thread into `ahead` (two chunks in memory at most).
-  Cursor ahead;
-  std::future<bool> prefetch;
+  LZ4F_dctx* lz4 = nullptr;
 
   // Recorded metadata, gathered before the first depth frame.
   std::map<int, std::map<std::string, std::string>> device_info;
@@ -107,21 +97,14 @@ struct BagReader::Impl {
   std::map<StreamKey, CameraInfoView> camera_infos;
 
   ~Impl() {
-    if (prefetch.valid()) prefetch.wait();
     if (fd >= 0) ::close(fd);
+    if (lz4) LZ4F_freeDecompressionContext(lz4);
   }
 
   // Decompresses one LZ4 frame; false on damaged data or a size other than expected.
-  static bool Lz4(Cursor* c, std::size_t in_size, std::size_t out_size) {
-    if (!c->lz4) {
-      LZ4F_dctx* ctx = nullptr;
-      if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) return false;
-      c->lz4.reset(ctx);
-    }
-    LZ4F_dctx* lz4 = c->lz4.get();
+  bool Lz4(const std::uint8_t* in, std::size_t in_size, std::uint8_t* out, std::size_t out_size) {
+    if (!lz4 && LZ4F_isError(LZ4F_createDecompressionContext(&lz4, LZ4F_VERSION))) return false;
     LZ4F_resetDecompressionContext(lz4);
-    const std::uint8_t* in = c->raw.data();
-    std::uint8_t* out = c->data.data();
     std::size_t done_in = 0, done_out = 0;
     for (;;) {
       std::size_t dst = out_size - done_out, src = in_size - done_in;
@@ -324,8 +307,7 @@ struct BagReader::Impl {
   }
 
   // Loads the next chunk at or after c->next_record. False at the end of the chunk data.
-  // Touches nothing but *c, so it may run on the read-ahead thread.
-  bool LoadNextChunk(Cursor* c) const {
+  bool LoadNextChunk(Cursor* c) {
     while (c->next_record < data_end) {
       const std::uint64_t offset = c->next_record;
       std::uint64_t data_offset = 0;
@@ -380,7 +362,7 @@ struct BagReader::Impl {
         if (c->data.size() < plain_size) c->data.resize(plain_size);
         bool ok;
         if (compression == "lz4") {
-          ok = Lz4(c, stored, plain_size);
+          ok = Lz4(c->raw.data(), stored, c->data.data(), plain_size);
         } else {
           unsigned int out_size = plain_size;
           ok = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(c->data.data()), &out_size,
@@ -396,7 +378,7 @@ struct BagReader::Impl {
         Fail(BagError::Kind::kCorrupt, "chunk at " + At(offset) + " has unknown compression '" +
                                            OneLine(compression) + "'");
       }
-      c->compressed = compression != "none";
+      if (compression != "none") info.compressed = true;
       c->chunk_pos = offset;
       c->pos = 0;
       c->cut = cut;
@@ -468,28 +450,6 @@ struct BagReader::Impl {
     for (;;) {
       if (c->loaded && NextInChunk(c, m)) return true;
       if (!LoadNextChunk(c)) return false;
-      if (c->compressed) info.compressed = true;
-    }
-  }
-
-  // NextMessage for the frame cursor, with the next chunk read ahead on another thread.
-  bool NextFrameMessage(Message* m) {
-    for (;;) {
-      if (cursor.loaded && NextInChunk(&cursor, m)) return true;
-      bool found;
-      if (prefetch.valid()) {
-        found = prefetch.get();  // rethrows the read-ahead's BagError here, in order
-        std::swap(cursor, ahead);
-      } else {
-        found = LoadNextChunk(&cursor);
-      }
-      if (!found) return false;
-      // Small chunks are not worth a thread.
-      if (cursor.size >= kReadAheadMinBytes && cursor.next_record < data_end) {
-        ahead.next_record = cursor.next_record;
-        ahead.loaded = false;
-        prefetch = std::async(std::launch::async, [this] { return LoadNextChunk(&ahead); });
-      }
     }
   }
 
@@ -768,7 +728,7 @@ bool BagReader::Next(camera::DepthFrame* frame) {
   if (d.finished) return false;
   try {
     Impl::Message m;
-    while (d.NextFrameMessage(&m)) {
+    while (d.NextMessage(&d.cursor, &m)) {
       if (m.conn != d.depth_conn) continue;
       d.DecodeDepth(m, frame);
       return true;
