@@ -228,6 +228,38 @@ TEST_P(RecordedBag, AgreesWithRosbagStorage) {
   EXPECT_FALSE(reader.Next(&frame));
 }
 
+// The same recording rewritten by rosbag_storage with one message per chunk (so most chunks hold
+// no depth frame and are skipped by the index), uncompressed and LZ4.
+TEST(RecordedBagRechunked, OneMessagePerChunkGivesTheSameFrames) {
+  TempDir dir;
+  const std::string source = FixturePath("d455_depth_color_imu.bag");
+  const Truth truth("d455_depth_color_imu.bag");
+  for (bool lz4 : {false, true}) {
+    const std::string path = dir.File(lz4 ? "rechunked_lz4.bag" : "rechunked.bag");
+    {
+      rosbag::Bag in(source, rosbag::bagmode::Read);
+      rosbag::Bag out(path, rosbag::bagmode::Write);
+      out.setChunkThreshold(1);
+      if (lz4) out.setCompression(rosbag::compression::LZ4);
+      rosbag::View view(in);
+      for (const rosbag::MessageInstance& m : view)
+        out.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+    }
+    BagReader reader(path);
+    EXPECT_EQ(reader.info().streams.size(), 4u);
+    EXPECT_EQ(reader.info().depth_frames, truth.node["frames"].size());
+    EXPECT_EQ(reader.info().options.at("Visual_Preset"), 4.0);
+    camera::DepthFrame f;
+    std::size_t i = 0;
+    for (; reader.Next(&f); ++i) {
+      ASSERT_LT(i, truth.node["frames"].size());
+      const auto pixels = truth.node["frames"][i]["pixels"].as<std::vector<int>>();
+      EXPECT_TRUE(std::equal(pixels.begin(), pixels.end(), f.counts.begin())) << i;
+    }
+    EXPECT_EQ(i, truth.node["frames"].size()) << "lz4 " << lz4;
+  }
+}
+
 TEST(PresetName, FollowsTheD455Numbering) {
   EXPECT_EQ(PresetName(3), "HA");
   EXPECT_EQ(PresetName(4), "HD");
