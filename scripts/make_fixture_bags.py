@@ -11,6 +11,7 @@ that librealsense reads the same back.
 
 Usage: scripts/make_fixture_bags.py [OUT_DIR]   (default tests/data/bags)
 """
+import importlib.metadata
 import json
 import os
 import sys
@@ -175,8 +176,8 @@ def record(path, fx, salt):
     names = {str(k).split(".")[-1]: v for k, v in DEVICE_INFO.items()}
     return dict(
         file=os.path.basename(path),
-        recorder="librealsense %s software_device + rs.recorder" % rs.__version__
-        if hasattr(rs, "__version__") else "librealsense software_device + rs.recorder",
+        recorder="pyrealsense2 %s software_device + rs.recorder" %
+        importlib.metadata.version("pyrealsense2"),
         compressed=fx["compress"],
         depth_units=F32(fx["units"]),
         intrinsics=dict(width=w, height=h, fx=F32(d_intr.fx), fy=F32(d_intr.fy),

@@ -60,7 +60,8 @@ template <>
 struct Serializer<depthbias::io::bag_detail::RawMessage> {
   template <typename Stream>
   inline static void write(Stream& stream, const depthbias::io::bag_detail::RawMessage& m) {
-    if (!m.bytes.empty()) std::memcpy(stream.advance(m.bytes.size()), m.bytes.data(), m.bytes.size());
+    if (m.bytes.empty()) return;
+    std::memcpy(stream.advance(m.bytes.size()), m.bytes.data(), m.bytes.size());
   }
   inline static uint32_t serializedLength(const depthbias::io::bag_detail::RawMessage& m) {
     return static_cast<uint32_t>(m.bytes.size());
@@ -226,15 +227,30 @@ struct BagWriter::Impl {
   }
 };
 
+bool BagWriterConfig::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  std::string bad;
+  if (!intrinsics.IsValid(&bad)) return fail("invalid intrinsics: " + bad);
+  if (!(depth_units_m > 0) || !std::isfinite(depth_units_m))
+    return fail("depth units must be positive");
+  if (!(fps > 0) || !std::isfinite(fps)) return fail("fps must be positive");
+  for (const auto& [name, value] : options) {
+    if (name.empty() || name.find_first_of("/ ") != std::string::npos)
+      return fail("option name '" + name + "' must be one word without '/'");
+    if (!std::isfinite(value)) return fail("option " + name + " must be finite");
+  }
+  return true;
+}
+
 BagWriter::BagWriter(const std::string& path, BagWriterConfig config) : impl_(new Impl) {
   Impl& d = *impl_;
   d.path = path;
   d.config = std::move(config);
   std::string why;
-  if (!d.config.intrinsics.IsValid(&why)) d.Fail("invalid intrinsics: " + why);
-  if (!(d.config.depth_units_m > 0) || !std::isfinite(d.config.depth_units_m))
-    d.Fail("depth units must be positive");
-  if (!(d.config.fps > 0) || !std::isfinite(d.config.fps)) d.Fail("fps must be positive");
+  if (!d.config.IsValid(&why)) d.Fail(why);
   d.temp_path = path + ".part";
   try {
     d.bag.open(d.temp_path, rosbag::bagmode::Write);
@@ -280,11 +296,12 @@ void BagWriter::Write(const camera::DepthFrame& frame) {
   RawMessage image = Typed<sensor_msgs::Image>();
   image.bytes.reserve(frame.counts.size() * 2 + 64);
   Out o(&image);
-  const double stamp_s = frame.timestamp_ms * 1e-3;
-  const double sec = std::floor(stamp_s);
+  // Device timestamp as ros::Time (seconds and nanoseconds), as librealsense stamps frames.
+  const std::uint64_t stamp_ns =
+      static_cast<std::uint64_t>(std::llround(std::max(0.0, frame.timestamp_ms) * 1e6));
   o.U32(static_cast<std::uint32_t>(frame.frame_number));
-  o.U32(static_cast<std::uint32_t>(sec));
-  o.U32(static_cast<std::uint32_t>(std::lround((stamp_s - sec) * 1e9)) % 1000000000u);
+  o.U32(static_cast<std::uint32_t>(stamp_ns / 1000000000u));
+  o.U32(static_cast<std::uint32_t>(stamp_ns % 1000000000u));
   o.Str("1");  // librealsense's marker: depth units follow the pixels
   o.U32(static_cast<std::uint32_t>(frame.height)).U32(static_cast<std::uint32_t>(frame.width));
   o.Str("mono16").U8(0).U32(static_cast<std::uint32_t>(frame.width * 2));
