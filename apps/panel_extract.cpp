@@ -72,6 +72,11 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
   try {
     const io::ManifestRow* truth = manifest ? manifest->Find(job->path) : nullptr;
     if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
+    if (truth) {
+      m.distance_m = truth->distance_m;
+      m.angle_deg = truth->angle_deg;
+      m.light = truth->light;
+    }
     std::optional<panel::PixelBox> box;
     if (o.mode == "box") {
       const auto b = boxes.find(name);
@@ -85,17 +90,17 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     panel::SearchWindow window;
     if (truth) window = {truth->distance_m, truth->angle_deg};
     r = panel::ExtractPanel(source, in, params, window, box);
-    const std::string bag = m.bag;
+    const camera::PanelMetrics known = m;
     m = r.metrics;
-    m.bag = bag;
+    m.bag = known.bag;
     m.preset = OptionName(info.options, "Visual_Preset",
                           {{0, "Custom"}, {1, "Default"}, {2, "Hand"}, {3, "HA"}, {4, "HD"},
                            {5, "MD"}});
     m.emitter = OptionName(info.options, "Emitter_Enabled", {{0, "off"}, {1, "on"}});
     if (truth) {
-      m.distance_m = truth->distance_m;
-      m.angle_deg = truth->angle_deg;
-      m.light = truth->light;
+      m.distance_m = known.distance_m;
+      m.angle_deg = known.angle_deg;
+      m.light = known.light;
       if (truth->preset) m.preset = *truth->preset;
       if (truth->emitter) m.emitter = *truth->emitter;
     }

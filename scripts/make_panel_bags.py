@@ -64,7 +64,7 @@ class Quad:
         with np.errstate(divide="ignore", invalid="ignore"):
             z = np.where(np.abs(nr) > 1e-12, (self.n @ self.c) / nr, np.inf)
         z = np.where(z > 0, z, np.inf)
-        q = z[:, None] * rays - self.c
+        q = np.where(np.isfinite(z), z, 0.0)[:, None] * rays - self.c
         inside = (np.abs(q @ self.aw) <= self.w / 2) & (np.abs(q @ self.ah) <= self.h / 2)
         return np.where(inside & np.isfinite(z), z, np.inf)
 
@@ -126,13 +126,18 @@ def runs(mask):
 
 
 def inner_box(mask, margin=1):
-    """A box inside the footprint, as a careful hand would draw it: [u0, v0, u1, v1)."""
-    cols = np.nonzero(mask.any(axis=0))[0]
-    u0, u1 = cols[0] + margin, cols[-1] + 1 - margin
+    """A box inside the footprint as a careful hand draws it: centred on the middle of the
+    panel's image (its pixel centroid), as wide as the nearer side edge allows, as tall as every
+    one of its columns is covered, less a margin: [u0, v0, u1, v1) in pixels."""
+    vs, us = np.nonzero(mask)
+    uc, row = us.mean() + 0.5, int(round(vs.mean()))
+    cols = np.nonzero(mask[row])[0]
+    half = min(uc - cols[0], cols[-1] + 1 - uc) - margin
+    u0, u1 = int(math.ceil(uc - half)), int(math.floor(uc + half))
     sub = mask[:, u0:u1]
     top = max(np.argmax(sub[:, k]) for k in range(sub.shape[1]))
     bottom = min(H - np.argmax(sub[::-1, k]) for k in range(sub.shape[1]))
-    return [int(u0), int(top + margin), int(u1), int(bottom - margin)]
+    return [u0, int(top + margin), u1, int(bottom - margin)]
 
 
 def record(path, frames_fn, n, preset, emitter, compress):

@@ -66,25 +66,24 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
       if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
       measurer.Add(frame);
     }
-    // The box's centre pixel on the fitted plane gives the panel's direction and its corners
-    // on that plane its size.
+    // The box's centre ray gives a provisional direction; then the box's pixels on the fitted
+    // plane give the panel's centre and size.
     camera::PanelMetrics& m = res.metrics;
     const Eigen::Vector2d c(0.5 * (box->u0 + box->u1 - 1), 0.5 * (box->v0 + box->v1 - 1));
     const Eigen::Vector2d cr = camera::PixelToNormalized(intrinsics, c);
     res.measure = measurer.Finish({cr.x(), cr.y(), 1.0}, &m);
     if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not), res;
-    const Plane& pl = res.measure.plane.plane;
-    auto on_plane = [&](double u, double v) {
-      const Eigen::Vector2d r = camera::PixelToNormalized(intrinsics, {u, v});
-      const Eigen::Vector3d ray(r.x(), r.y(), 1.0);
-      return Eigen::Vector3d(pl.DepthOnRay(ray) * ray);
-    };
-    const Eigen::Vector3d center = on_plane(c.x(), c.y());
-    m.azimuth_deg = std::atan2(center.x(), center.z()) * 180.0 / M_PI;
-    m.elevation_deg =
-        std::atan2(-center.y(), std::hypot(center.x(), center.z())) * 180.0 / M_PI;
-    m.panel_width_m = (on_plane(box->u1 - 0.5, c.y()) - on_plane(box->u0 - 0.5, c.y())).norm();
-    m.panel_height_m = (on_plane(c.x(), box->v1 - 0.5) - on_plane(c.x(), box->v0 - 0.5)).norm();
+    PanelRectangle rect;
+    const Plane& pl = res.measure.disparity_plane_ok ? res.measure.disparity_plane
+                                                      : res.measure.plane.plane;
+    if (RectangleFromPixels(rays, pl, {0, -1, 0}, res.region.pixels, 1.0, &rect)) {
+      const Eigen::Vector3d& center = rect.center_m;
+      m.azimuth_deg = std::atan2(center.x(), center.z()) * 180.0 / M_PI;
+      m.elevation_deg =
+          std::atan2(-center.y(), std::hypot(center.x(), center.z())) * 180.0 / M_PI;
+      m.panel_width_m = rect.width_m;
+      m.panel_height_m = rect.height_m;
+    }
     return res;
   }
 
@@ -219,7 +218,18 @@ std::string DetectionJson(const ExtractResult& r, const camera::Intrinsics& in,
   for (std::size_t k = 0; k < r.region.outline_px.size(); ++k)
     j << (k ? ", " : "") << "[" << Num(r.region.outline_px[k].x()) << ", "
       << Num(r.region.outline_px[k].y()) << "]";
-  j << "], \"region_px\": " << r.region.size();
+  j << "], \"region_px\": " << r.region.size() << ", \"region_runs\": [";
+  // The region as [v, u_begin, u_end) runs of pixels, row by row.
+  const std::vector<std::uint32_t>& px = r.region.pixels;
+  for (std::size_t k = 0; k < px.size();) {
+    std::size_t e = k + 1;
+    while (e < px.size() && px[e] == px[e - 1] + 1 && px[e] % r.region.width != 0) ++e;
+    const int width = r.region.width;
+    j << (k ? ", " : "") << "[" << px[k] / width << ", " << px[k] % width << ", "
+      << px[e - 1] % width + 1 << "]";
+    k = e;
+  }
+  j << "]";
   if (!r.region.pixels.empty())
     j << ", \"region_bbox\": [" << r.region.u_min << ", " << r.region.v_min << ", "
       << r.region.u_max + 1 << ", " << r.region.v_max + 1 << "]";

@@ -89,6 +89,31 @@ Eigen::Vector2d PixelFootprint(const RayTable& rays, const PanelRectangle& rect)
 
 namespace {
 
+// Extent along one axis with isolated strays removed: walks in from each end while the gap to
+// the next value exceeds max_gap, dropping at most 2 % of the values per end.
+void RobustExtent(std::vector<double> v, double max_gap, double* lo, double* hi) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  const std::size_t cap = std::max<std::size_t>(1, n / 50);
+  std::size_t a = 0, b = n - 1;
+  while (a < cap && a + 1 < b && v[a + 1] - v[a] > max_gap) ++a;
+  while (n - 1 - b < cap && b > a + 1 && v[b] - v[b - 1] > max_gap) --b;
+  *lo = v[a];
+  *hi = v[b];
+}
+
+// In-plane axes of a panel plane: up is the ground's up direction (or the camera's) projected
+// onto the plane, width = up × normal (to the image's right for a panel facing the camera).
+bool PanelAxes(const Plane& plane, const Eigen::Vector3d& up_hint, Eigen::Vector3d* axis_w,
+               Eigen::Vector3d* axis_up) {
+  Eigen::Vector3d up = up_hint - up_hint.dot(plane.normal) * plane.normal;
+  if (up.norm() < 0.3) return false;  // plane close to horizontal: not a standing panel
+  up.normalize();
+  *axis_up = up;
+  *axis_w = up.cross(plane.normal).normalized();
+  return true;
+}
+
 void FinishRegion(PanelRegion* r) {
   std::sort(r->pixels.begin(), r->pixels.end());
   if (r->pixels.empty()) return;
@@ -157,5 +182,42 @@ PanelRegion RegionFromBox(int width, int height, double u0, double v0, double u1
   FinishRegion(&region);
   return region;
 }
+
+bool RectangleFromPixels(const RayTable& rays, const Plane& plane, const Eigen::Vector3d& up_hint,
+                         const std::vector<std::uint32_t>& pixels, double footprint_px,
+                         PanelRectangle* rect) {
+  if (pixels.size() < 3) return false;
+  PanelRectangle r;
+  r.plane = plane;
+  if (!PanelAxes(plane, up_hint, &r.axis_width, &r.axis_up)) return false;
+  // Provisional centre: the plane point on the mean ray.
+  Eigen::Vector3d mean_ray = Eigen::Vector3d::Zero();
+  for (std::uint32_t i : pixels) mean_ray += rays.Ray(i);
+  mean_ray /= static_cast<double>(pixels.size());
+  const double zc = plane.DepthOnRay(mean_ray);
+  if (!std::isfinite(zc)) return false;
+  r.center_m = zc * mean_ray;
+  std::vector<double> s, t;
+  s.reserve(pixels.size());
+  t.reserve(pixels.size());
+  Eigen::Vector2d st;
+  for (std::uint32_t i : pixels) {
+    if (!r.PlaneCoordinates(rays.Ray(i), &st)) continue;
+    s.push_back(st.x());
+    t.push_back(st.y());
+  }
+  if (s.size() < 3) return false;
+  r.width_m = r.height_m = 1.0;  // any size: only the footprint near the centre is needed
+  const Eigen::Vector2d foot = PixelFootprint(rays, r) * footprint_px;
+  double s0, s1, t0, t1;
+  RobustExtent(s, 3.0 * foot.x(), &s0, &s1);
+  RobustExtent(t, 3.0 * foot.y(), &t0, &t1);
+  r.center_m += 0.5 * (s0 + s1) * r.axis_width + 0.5 * (t0 + t1) * r.axis_up;
+  r.width_m = s1 - s0 + foot.x();
+  r.height_m = t1 - t0 + foot.y();
+  *rect = r;
+  return true;
+}
+
 
 }  // namespace depthbias::panel

@@ -92,6 +92,14 @@ PanelRegion RegionFromRectangle(const RayTable& rays, const PanelRectangle& rect
 // Pixels of an image-aligned box [u0, u1) × [v0, v1), clipped to the image.
 PanelRegion RegionFromBox(int width, int height, double u0, double v0, double u1, double v1);
 
+// Rectangle bounding the given pixels on the plane: in-plane axes from up_hint (the ground's or
+// the camera's up) projected onto the plane, extents from the pixels' rays meeting the plane
+// (isolated strays left out) plus half of footprint_px pixels' footprint on each side. False
+// for fewer than 3 pixels or a plane close to horizontal.
+bool RectangleFromPixels(const RayTable& rays, const Plane& plane, const Eigen::Vector3d& up_hint,
+                         const std::vector<std::uint32_t>& pixels, double footprint_px,
+                         PanelRectangle* rect);
+
 // Footprint of one pixel on the rectangle's plane near its centre, along width and up [m].
 Eigen::Vector2d PixelFootprint(const RayTable& rays, const PanelRectangle& rect);
 

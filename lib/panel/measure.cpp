@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Cholesky>
+
 namespace depthbias::panel {
 namespace {
 
@@ -123,19 +125,36 @@ MeasureResult RegionMeasurer::Finish(const Eigen::Vector3d& center_m,
     m->temporal_std_m = temporal[temporal.size() / 2];
   }
   res.plane = FitPlane(mom);
-  if (res.plane.ok) {
-    const Plane& pl = res.plane.plane;
-    m->plane_std_m = res.plane.rms_m;
+  if (res.plane.ok) m->plane_std_m = res.plane.rms_m;
+  // Inverse-depth plane: normal equations of 1/Z = k·a, a = (x/z, y/z, 1), one row per sample.
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < region_.pixels.size(); ++k) {
+    const PixelSums& s = sums_[k];
+    if (s.n == 0) continue;
+    const Eigen::Vector3d a = rays_->Ray(region_.pixels[k]);
+    ata += s.n * a * a.transpose();
+    atb += s.inv * a;
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+  const Eigen::Vector3d k = ldlt.solve(atb);
+  const double len = k.norm();
+  if (ldlt.info() == Eigen::Success && ldlt.rcond() > 1e-12 && std::isfinite(len) && len > 0) {
+    // n·(Z·a) + d = 0 ⇔ 1/Z = −(n/d)·a, so n = −k/|k| and d = 1/|k| (d > 0: n faces the camera).
+    res.disparity_plane_ok = true;
+    res.disparity_plane.normal = -k / len;
+    res.disparity_plane.offset_m = 1.0 / len;
+    const Plane& pl = res.disparity_plane;
     m->normal_tilt_deg = std::acos(std::min(1.0, std::fabs(pl.normal.z()))) * kRadToDeg;
     // Subpixel RMS (Depth Quality Tool): D = f·B/Z of each sample against DP = f·B/ZP of the
     // same pixel's ray on the fitted plane; Σ(D − DP)² = (fB)²·(Σ1/Z² − 2/ZP·Σ1/Z + n/ZP²).
     const double fb = rays_->intrinsics().fx * baseline_m_;
     double sq = 0;
     std::uint64_t used = 0;
-    for (std::size_t k = 0; k < region_.pixels.size(); ++k) {
-      const PixelSums& s = sums_[k];
+    for (std::size_t j = 0; j < region_.pixels.size(); ++j) {
+      const PixelSums& s = sums_[j];
       if (s.n == 0) continue;
-      const double zp = pl.DepthOnRay(rays_->Ray(region_.pixels[k]));
+      const double zp = pl.DepthOnRay(rays_->Ray(region_.pixels[j]));
       if (!std::isfinite(zp)) continue;
       const double ip = 1.0 / zp;
       sq += std::max(0.0, s.inv2 - 2.0 * ip * s.inv + s.n * ip * ip);

@@ -18,7 +18,12 @@ namespace depthbias::panel {
 struct MeasureResult {
   bool ok = false;
   std::string why_not;
-  PlaneFit plane;              // plane fitted to every valid region sample
+  PlaneFit plane;              // total least squares plane of every valid region sample
+  // Plane fitted in inverse depth, 1/Z = a·x/z + b·y/z + c: ordinary least squares, the maximum
+  // likelihood plane for noise in disparity (along the rays). Unlike the orthogonal fit it has
+  // no tilt bias when the depth noise is large against the panel size (far panels).
+  bool disparity_plane_ok = false;
+  Plane disparity_plane;
   std::uint64_t samples = 0;   // valid region samples pooled over frames
   std::uint64_t frames = 0;    // frames measured
   std::uint64_t frames_with_depth = 0;
@@ -32,9 +37,9 @@ class RegionMeasurer {
   // Adds one frame; the frame must match the rays' image size (checked by the caller).
   void Add(const camera::DepthFrame& frame);
 
-  // Fills the depth columns of metrics (frames, mean, median, plane std, hole rate, range,
-  // normal tilt, region_px, subpixel RMS, temporal std); azimuth and elevation come from
-  // center_m, the panel centre on its plane.
+  // Fills the depth columns of metrics (frames, mean, median, plane std from the orthogonal fit,
+  // hole rate, range, normal tilt and subpixel RMS from the disparity plane, region_px, temporal
+  // std); azimuth and elevation come from center_m, the panel centre on its plane.
   MeasureResult Finish(const Eigen::Vector3d& center_m, camera::PanelMetrics* metrics) const;
 
   const PanelRegion& region() const { return region_; }

@@ -76,6 +76,7 @@ TEST(PanelGeometry, PlaneFitRecoversKnownPlane) {
 
 struct Point {
   double distance_m, angle_deg, hole_rate;
+  int frames;  // enough valid samples for the normal (scripts/make_panel_bags.py, frames_for)
 };
 
 class PanelAtTestPoint : public ::testing::TestWithParam<Point> {};
@@ -85,7 +86,7 @@ TEST_P(PanelAtTestPoint, FoundAndMeasuredWithinTolerance) {
   s.distance_m = GetParam().distance_m;
   s.angle_deg = GetParam().angle_deg;
   s.hole_rate = GetParam().hole_rate;
-  s.frames = 30;
+  s.frames = GetParam().frames;
   const Scene scene(s);
   VectorSource src(&scene);
   PanelParams p;
@@ -105,8 +106,90 @@ TEST_P(PanelAtTestPoint, FoundAndMeasuredWithinTolerance) {
 
 INSTANTIATE_TEST_SUITE_P(
     ArticleGrid, PanelAtTestPoint,
-    ::testing::Values(Point{4, 0, 0.05}, Point{4, 35, 0.35}, Point{8, 10, 0.3},
-                      Point{12, 20, 0.75}, Point{16, 0, 0.4}, Point{16, 35, 0.99}));
+    ::testing::Values(Point{4, 0, 0.05, 20}, Point{4, 35, 0.35, 20}, Point{8, 10, 0.3, 20},
+                      Point{12, 20, 0.75, 20}, Point{16, 0, 0.4, 20}, Point{16, 35, 0.99, 300}));
+
+// A panel with 1 % valid pixels per frame is still found from 30 pooled frames.
+TEST(PanelDetect, SparsePanelIsFoundFromPooledFrames) {
+  SceneSpec s;
+  s.distance_m = 16;
+  s.angle_deg = 35;
+  s.hole_rate = 0.99;
+  s.frames = 30;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  const ExtractResult r = ExtractPanel(src, scene.in, PanelParams{});
+  ASSERT_TRUE(r.detection.found) << r.detection.why_not;
+  EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
+  EXPECT_NEAR(r.metrics.hole_rate_pct, 99.0, 1.0);
+  EXPECT_EQ(r.passes, 1);
+  EXPECT_EQ(src.rewinds, 0);
+}
+
+// detection_frames = 0 pools every frame and measures in a second pass over the source.
+TEST(PanelDetect, PoolingEveryFrameReadsTwice) {
+  SceneSpec s;
+  s.frames = 12;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  PanelParams p;
+  p.detection_frames = 0;
+  const ExtractResult r = ExtractPanel(src, scene.in, p);
+  ASSERT_EQ(r.metrics.status, "ok") << r.metrics.message;
+  EXPECT_EQ(r.passes, 2);
+  EXPECT_EQ(r.frames_read, 24u);
+  EXPECT_EQ(r.metrics.frames, 12);
+}
+
+// The clutter (a bigger wall, a small box) is seen but the panel is chosen.
+TEST(PanelDetect, ClutterDoesNotWin) {
+  SceneSpec s;
+  s.distance_m = 12;
+  s.angle_deg = 10;
+  s.hole_rate = 0.5;
+  s.clutter = true;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  const ExtractResult r = ExtractPanel(src, scene.in, PanelParams{});
+  ASSERT_TRUE(r.detection.found) << r.detection.why_not;
+  EXPECT_GE(r.detection.candidates.size(), 3u);
+  EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
+}
+
+// A scene without a panel gives no_panel and says why; a frame of the wrong size gives error.
+TEST(PanelDetect, NoPanelAndBadFramesAreReported) {
+  SceneSpec s;
+  s.panel_size_m = 3.0;  // a wall, not the 1 × 1 m panel
+  const Scene scene(s);
+  VectorSource src(&scene);
+  const ExtractResult r = ExtractPanel(src, scene.in, PanelParams{});
+  EXPECT_EQ(r.metrics.status, "no_panel");
+  EXPECT_FALSE(r.metrics.message.empty());
+  camera::Intrinsics small = scene.in;
+  small.width = 640;
+  VectorSource src2(&scene);
+  const ExtractResult bad = ExtractPanel(src2, small, PanelParams{});
+  EXPECT_EQ(bad.metrics.status, "error");
+  EXPECT_NE(bad.metrics.message.find("1280x720"), std::string::npos) << bad.metrics.message;
+}
+
+// The manual box over the true panel measures the same depth as the automatic region.
+TEST(PanelExtractBox, BoxInsideThePanelAgreesWithAutomatic) {
+  SceneSpec s;
+  s.distance_m = 8;
+  const Scene scene(s);
+  VectorSource a(&scene), b(&scene);
+  const ExtractResult ra = ExtractPanel(a, scene.in, PanelParams{});
+  ASSERT_EQ(ra.metrics.status, "ok");
+  const PanelRegion& reg = ra.region;
+  const PixelBox box{reg.u_min + 3.0, reg.v_min + 3.0, reg.u_max - 2.0, reg.v_max - 2.0};
+  const ExtractResult rb = ExtractPanel(b, scene.in, PanelParams{}, {}, box);
+  ASSERT_EQ(rb.metrics.status, "ok") << rb.metrics.message;
+  EXPECT_NEAR(rb.metrics.median_m, ra.metrics.median_m, QuantStep(8, scene.in.fx));
+  EXPECT_NEAR(rb.metrics.azimuth_deg, ra.metrics.azimuth_deg, 0.5);
+  EXPECT_NEAR(rb.metrics.normal_tilt_deg, ra.metrics.normal_tilt_deg, 1.0);
+  EXPECT_EQ(rb.metrics.region_px, (reg.u_max - reg.u_min - 5.0) * (reg.v_max - reg.v_min - 5.0));
+}
 
 }  // namespace
 }  // namespace depthbias::panel
