@@ -15,11 +15,17 @@
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
 #include "panel/extract.h"
+#include "panel/prefetch.h"
 
 namespace fs = std::filesystem;
 using namespace depthbias;
 
 namespace {
+
+// A mistake on the command line: the message is followed by the usage line.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 const char* kUsage =
     "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
@@ -89,7 +95,8 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     in = info.depth_intrinsics;
     panel::SearchWindow window;
     if (truth) window = {truth->distance_m, truth->angle_deg};
-    r = panel::ExtractPanel(source, in, params, window, box);
+    panel::PrefetchSource ahead(&source, 4);  // read on one core, measure on the other
+    r = panel::ExtractPanel(ahead, in, params, window, box);
     const camera::PanelMetrics known = m;
     m = r.metrics;
     m.bag = known.bag;
@@ -125,7 +132,7 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
+        if (i + 1 >= argc) throw UsageError(a + " needs a value");
         return argv[++i];
       };
       if (a == "--manifest") o.manifest = value();
@@ -137,12 +144,12 @@ int main(int argc, char** argv) {
       else if (a == "--jobs") o.jobs = std::max(1, std::atoi(value().c_str()));
       else if (a == "--quiet") o.quiet = true;
       else if (a == "--help" || a == "-h") return std::cout << kUsage << "\n", 0;
-      else if (a.rfind("--", 0) == 0) throw std::runtime_error("unknown option " + a);
+      else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
       else o.inputs.push_back(a);
     }
-    if (o.inputs.empty()) throw std::runtime_error("no recording given");
-    if (o.mode != "auto" && o.mode != "box") throw std::runtime_error("--region-mode auto|box");
-    if (o.mode == "box" && o.boxes.empty()) throw std::runtime_error("box mode needs --boxes");
+    if (o.inputs.empty()) throw UsageError("no recording given");
+    if (o.mode != "auto" && o.mode != "box") throw UsageError("--region-mode auto|box");
+    if (o.mode == "box" && o.boxes.empty()) throw UsageError("box mode needs --boxes");
     if (!o.config.empty()) {
       for (const io::ConfigEntry& e : io::ReadConfigScalars(o.config)) {
         std::string why;
@@ -166,8 +173,11 @@ int main(int argc, char** argv) {
       std::sort(found.begin(), found.end());
       for (const std::string& f : found) jobs.push_back({f, {}, {}});
     }
-  } catch (const std::exception& e) {
+  } catch (const UsageError& e) {
     std::cerr << "panel_extract: " << e.what() << "\n" << kUsage << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n";
     return 2;
   }
 

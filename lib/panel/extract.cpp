@@ -107,7 +107,10 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     ++res.frames_read;
     if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
     acc.Add(frame);
-    if (cache) cached.push_back(frame);
+    if (cache) {
+      cached.emplace_back();
+      std::swap(cached.back(), frame);
+    }
   }
   if (acc.frames() == 0) {
     Fail(&res, "error", "the recording holds no depth frame");
