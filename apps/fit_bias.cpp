@@ -1,0 +1,150 @@
+// fit_bias: panel-metrics CSV → bias model weights YAML (DESIGN.md), and a table on stdout.
+//   fit_bias --in metrics.csv --out weights.yaml [--model disp_knots|disp_tan|disp_scale|paper6]
+//            [--lambda 0.001] [--loss auto|none|huber|cauchy|soft_l1] [--loss-scale 1.0]
+//            [--group-by light,preset] [--cv point,distance|point|distance|none]
+//            [--weight-valid] [--focal-px 640] [--baseline-m 0.095] [--prior name=mean:strength]
+//            [--nested] [--cv-out heldout.csv]
+// --nested also judges the choice of a model out of sample: every form × {none, huber} is a
+// candidate, chosen in each outer fold by inner cross-validation on that fold's training rows.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/atomic_file.h"
+#include "io/csv.h"
+#include "io/metrics_csv.h"
+#include "io/sha256.h"
+#include "io/weights_yaml.h"
+#include "model/fit_groups.h"
+
+namespace {
+
+using namespace depthbias;
+
+std::vector<std::string> Split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, ',');) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+int Fail(const std::string& what) {
+  std::cerr << "fit_bias: " << what << "\n";
+  return 1;
+}
+
+double ToDouble(const std::string& flag, const std::string& text) {
+  size_t used = 0;
+  const double v = std::stod(text, &used);
+  if (used != text.size()) throw std::invalid_argument(flag + " '" + text + "' is not a number");
+  return v;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string in, out, cv_out;
+  bool nested = false;
+  model::FitGroupsParams params;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--in") in = value();
+      else if (a == "--out") out = value();
+      else if (a == "--model") params.fit.model = value();
+      else if (a == "--lambda") params.fit.lambda = ToDouble(a, value());
+      else if (a == "--loss-scale") params.fit.loss_scale_m = ToDouble(a, value());
+      else if (a == "--focal-px") params.fit.focal_px = ToDouble(a, value());
+      else if (a == "--baseline-m") params.fit.baseline_m = ToDouble(a, value());
+      else if (a == "--cv-out") cv_out = value();
+      else if (a == "--weight-valid") params.fit.weight_by_valid_pixels = true;
+      else if (a == "--nested") nested = true;
+      else if (a == "--group-by") params.group_by = Split(value());
+      else if (a == "--loss") {
+        const std::string v = value();
+        if (!model::ParseLoss(v, &params.fit.loss)) throw std::invalid_argument("--loss " + v);
+      } else if (a == "--cv") {
+        params.cv.clear();
+        for (const auto& s : Split(value())) {
+          model::CvScheme scheme;
+          if (!model::ParseCvScheme(s, &scheme)) throw std::invalid_argument("--cv " + s);
+          params.cv.push_back(scheme);
+        }
+      } else if (a == "--prior") {
+        const std::string v = value();
+        const auto eq = v.find('='), colon = v.find(':');
+        if (eq == std::string::npos || colon == std::string::npos || colon < eq) {
+          throw std::invalid_argument("--prior expects name=mean:strength, got '" + v + "'");
+        }
+        params.fit.priors.push_back({v.substr(0, eq),
+                                     ToDouble("--prior", v.substr(eq + 1, colon - eq - 1)),
+                                     ToDouble("--prior", v.substr(colon + 1))});
+      } else {
+        throw std::invalid_argument("unknown argument '" + a + "'");
+      }
+    }
+  } catch (const std::exception& e) {
+    return Fail(std::string("bad arguments: ") + e.what());
+  }
+  if (in.empty() || out.empty()) return Fail("usage: fit_bias --in metrics.csv --out w.yaml");
+  if (io::SameFile(in, out)) return Fail(out + ": the output would overwrite the input");
+  if (nested) params.nested_candidates = model::DefaultCandidates(params.fit);
+  std::string why;
+  if (!params.IsValid(&why)) return Fail(why);
+
+  std::vector<camera::PanelMetrics> rows;
+  std::string sha;
+  try {
+    rows = io::ReadMetricsCsv(in);
+    sha = io::Sha256File(in);
+  } catch (const io::IoError& e) {
+    return Fail(e.what());
+  }
+  const model::FitReport report = model::FitGroups(rows, params);
+  if (!report.success) return Fail(in + ": " + report.message);
+
+  for (const auto& w : report.warnings) std::cerr << "fit_bias: warning: " << w << "\n";
+  camera::BiasWeights weights = model::ToWeights(report, params);
+  weights.input_file = in;
+  weights.input_sha256 = sha;
+  weights.tool = "fit_bias";
+  weights.tool_version = DEPTHBIAS_VERSION;
+  try {
+    io::WriteWeightsYaml(out, weights);
+  } catch (const io::IoError& e) {
+    return Fail(e.what());
+  }
+
+  if (!cv_out.empty()) {
+    // Held-out error of every row under every scheme: which recordings the model cannot explain.
+    std::vector<std::vector<std::string>> cells;
+    for (const auto& g : report.groups) {
+      for (const auto& cv : g.cv) {
+        for (size_t i = 0; i < g.group.rows.size(); ++i) {
+          const auto& r = rows[g.group.rows[i]];
+          cells.push_back({r.bag, g.group.Label(), model::CvSchemeName(cv.scheme),
+                           io::CsvNumber(r.distance_m), io::CsvNumber(r.angle_deg), r.emitter,
+                           io::CsvNumber(r.median_m - r.distance_m),
+                           io::CsvNumber(i < cv.errors_m.size() ? cv.errors_m[i] : NAN)});
+        }
+      }
+    }
+    try {
+      io::WriteCsv(cv_out, {"bag", "group", "scheme", "distance_m", "angle_deg", "emitter",
+                            "bias_m", "heldout_error_m"}, cells);
+    } catch (const io::IoError& e) {
+      return Fail(e.what());
+    }
+  }
+  std::fputs(model::FormatFitTable(report, params).c_str(), stdout);
+  return 0;
+}

@@ -1,0 +1,180 @@
+#include "model/fit_groups.h"
+
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <map>
+
+namespace depthbias::model {
+
+bool FitGroupsParams::IsValid(std::string* why) const {
+  if (!fit.IsValid(why)) return false;
+  for (const auto& k : group_by) {
+    if (k != "light" && k != "preset" && k != "emitter") {
+      if (why) *why = "unknown grouping key '" + k + "' (known: light, preset, emitter)";
+      return false;
+    }
+  }
+  return true;
+}
+
+FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
+                    const FitGroupsParams& params) {
+  FitReport report;
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!params.IsValid(&why)) {
+    report.message = why;
+    return report;
+  }
+  for (const auto& r : rows) (r.ok() ? report.rows_used : report.rows_skipped)++;
+  if (report.rows_used == 0) {
+    report.message = "no row with status ok to fit";
+    return report;
+  }
+  for (const auto& g : GroupRows(rows, params.group_by)) {
+    GroupReport gr;
+    gr.group = g;
+    const auto samples = MakeSamples(rows, g.rows, params.fit.weight_by_valid_pixels);
+    gr.fit = Fit(samples, params.fit);
+    if (!gr.fit.success) {
+      report.message = "group " + g.Label() + ": " + gr.fit.message;
+      return report;
+    }
+    for (CvScheme s : params.cv) {
+      if (s == CvScheme::kNone) continue;
+      gr.cv.push_back(CrossValidate(samples, params.fit, s));
+      if (!gr.cv.back().success) {
+        gr.cv.back().rmse_m = gr.cv.back().mae_m = std::numeric_limits<double>::quiet_NaN();
+        report.warnings.push_back("group " + g.Label() + ": no " + CvSchemeName(s) +
+                                  " cross-validation: " + gr.cv.back().message);
+      }
+    }
+    if (!params.nested_candidates.empty() && !params.cv.empty() &&
+        params.cv.front() != CvScheme::kNone) {
+      gr.nested = NestedCrossValidate(samples, params.nested_candidates, params.cv.front(),
+                                      &gr.nested_chosen);
+      if (!gr.nested.success) {
+        gr.nested.rmse_m = std::numeric_limits<double>::quiet_NaN();
+        report.warnings.push_back("group " + g.Label() + ": no nested cross-validation: " +
+                                  gr.nested.message);
+      }
+    }
+    report.groups.push_back(std::move(gr));
+  }
+  report.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.success = true;
+  return report;
+}
+
+std::vector<FitParams> DefaultCandidates(const FitParams& base) {
+  std::vector<FitParams> out;
+  for (const auto& name : FormNames()) {
+    for (Loss loss : {Loss::kNone, Loss::kHuber}) {
+      FitParams p = base;
+      p.model = name;
+      p.loss = loss;
+      p.priors.clear();
+      out.push_back(p);
+    }
+  }
+  return out;
+}
+
+std::string FormatFitTable(const FitReport& report, const FitGroupsParams& params) {
+  std::string out;
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "model %s  loss %s (scale %g m)  lambda %g  rows %d used, %d skipped  %.3f s\n",
+                params.fit.model.c_str(),
+                LossName(ResolveLoss(params.fit.loss, params.fit.model)).c_str(),
+                params.fit.loss_scale_m, params.fit.lambda, report.rows_used,
+                report.rows_skipped, report.seconds);
+  out += buf;
+  std::snprintf(buf, sizeof(buf), "%-20s %3s %8s %8s", "group", "n", "rmse_m", "mae_m");
+  out += buf;
+  for (CvScheme s : params.cv) {
+    if (s == CvScheme::kNone) continue;
+    const std::string n = CvSchemeName(s);
+    std::snprintf(buf, sizeof(buf), " %14s %13s", (n + "_cv_rmse").c_str(),
+                  (n + "_cv_mae").c_str());
+    out += buf;
+  }
+  if (!params.nested_candidates.empty()) {
+    std::snprintf(buf, sizeof(buf), " %12s", "nested_rmse");
+    out += buf;
+  }
+  out += "  weights\n";
+  for (const auto& g : report.groups) {
+    std::snprintf(buf, sizeof(buf), "%-20s %3d %8.3f %8.3f", g.group.Label().c_str(), g.fit.n,
+                  g.fit.rmse_m, g.fit.mae_m);
+    out += buf;
+    for (const auto& cv : g.cv) {
+      std::snprintf(buf, sizeof(buf), " %14.3f %13.3f", cv.rmse_m, cv.mae_m);
+      out += buf;
+    }
+    if (!params.nested_candidates.empty()) {
+      std::snprintf(buf, sizeof(buf), " %12.3f", g.nested.rmse_m);
+      out += buf;
+    }
+    out += " ";
+    for (size_t j = 0; j < g.fit.names.size(); ++j) {
+      std::snprintf(buf, sizeof(buf), " %s=%.3f", g.fit.names[j].c_str(), g.fit.values[j]);
+      out += buf;
+    }
+    out += "\n";
+  }
+  if (!params.nested_candidates.empty()) {
+    out += "nested choice (candidate: outer folds that chose it):\n";
+    for (const auto& g : report.groups) {
+      std::map<int, int> count;
+      for (int c : g.nested_chosen) ++count[c];
+      out += "  " + g.group.Label() + ":";
+      for (const auto& [c, k] : count) {
+        const auto& p = params.nested_candidates[static_cast<size_t>(c)];
+        out += " " + p.model + "/" + LossName(ResolveLoss(p.loss, p.model)) + ":" +
+               std::to_string(k);
+      }
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+camera::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params) {
+  camera::BiasWeights w;
+  w.model = params.fit.model;
+  w.lambda = params.fit.lambda;
+  w.loss = LossName(ResolveLoss(params.fit.loss, params.fit.model));
+  w.loss_scale_m = params.fit.loss_scale_m;
+  w.focal_px = params.fit.focal_px;
+  w.baseline_m = params.fit.baseline_m;
+  w.group_by = params.group_by;
+  for (const auto& gr : report.groups) {
+    camera::BiasWeightsGroup g;
+    g.light = gr.group.light;
+    g.preset = gr.group.preset;
+    g.emitter = gr.group.emitter;
+    g.n = gr.fit.n;
+    g.names = gr.fit.names;
+    g.values = gr.fit.values;
+    g.knots_deg = gr.fit.constants.knots_deg;
+    g.rmse_m = gr.fit.rmse_m;
+    g.mae_m = gr.fit.mae_m;
+    g.residual_std_m = gr.fit.residual_std_m;
+    for (const auto& cv : gr.cv) g.cv.push_back({CvSchemeName(cv.scheme), cv.rmse_m, cv.mae_m});
+    if (gr.fit.covariance_ok) {
+      const auto& c = gr.fit.covariance;
+      for (Eigen::Index i = 0; i < c.rows(); ++i) {
+        std::vector<double> row;
+        for (Eigen::Index j = 0; j < c.cols(); ++j) row.push_back(c(i, j));
+        g.covariance.push_back(row);
+      }
+    }
+    w.groups.push_back(std::move(g));
+  }
+  return w;
+}
+
+}  // namespace depthbias::model
