@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -11,13 +10,13 @@
 
 #include "io/atomic_file.h"
 #include "io/bag.h"
+#include "io/bag_list.h"
 #include "io/config_file.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
 #include "panel/extract.h"
 #include "panel/prefetch.h"
 
-namespace fs = std::filesystem;
 using namespace depthbias;
 
 namespace {
@@ -46,14 +45,6 @@ class BagSource : public panel::FrameSource {
   std::string path_;
   std::unique_ptr<io::BagReader> reader_;
 };
-
-std::string OptionName(const std::map<std::string, double>& opt, const std::string& key,
-                       const std::map<int, std::string>& names) {
-  const auto it = opt.find(key);
-  if (it == opt.end()) return "";
-  const auto n = names.find(static_cast<int>(std::lround(it->second)));
-  return n != names.end() ? n->second : std::to_string(it->second);
-}
 
 struct Options {
   std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
@@ -100,10 +91,10 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     const camera::PanelMetrics known = m;
     m = r.metrics;
     m.bag = known.bag;
-    m.preset = OptionName(info.options, "Visual_Preset",
-                          {{0, "Custom"}, {1, "Default"}, {2, "Hand"}, {3, "HA"}, {4, "HD"},
-                           {5, "MD"}});
-    m.emitter = OptionName(info.options, "Emitter_Enabled", {{0, "off"}, {1, "on"}});
+    const auto preset = info.options.find("Visual_Preset");
+    const auto emitter = info.options.find("Emitter_Enabled");
+    if (preset != info.options.end()) m.preset = io::PresetName(preset->second);
+    if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
     if (truth) {
       m.distance_m = known.distance_m;
       m.angle_deg = known.angle_deg;
@@ -161,18 +152,7 @@ int main(int argc, char** argv) {
     if (!params.IsValid(&why)) throw std::runtime_error(o.config + ": " + why);
     if (!o.manifest.empty()) manifest = std::make_unique<io::Manifest>(io::ReadManifest(o.manifest));
     if (!o.boxes.empty()) boxes = io::ReadBoxes(o.boxes);
-    for (const std::string& in : o.inputs) {
-      if (!fs::is_directory(in)) {
-        jobs.push_back({in, {}, {}});
-        continue;
-      }
-      std::vector<std::string> found;
-      for (const auto& e : fs::recursive_directory_iterator(in))
-        if (e.is_regular_file() && e.path().extension() == ".bag") found.push_back(e.path());
-      if (found.empty()) throw std::runtime_error(in + ": no .bag file in this folder");
-      std::sort(found.begin(), found.end());
-      for (const std::string& f : found) jobs.push_back({f, {}, {}});
-    }
+    for (const std::string& path : io::ListBags(o.inputs)) jobs.push_back({path, {}, {}});
   } catch (const UsageError& e) {
     std::cerr << "panel_extract: " << e.what() << "\n" << kUsage << "\n";
     return 2;
