@@ -86,22 +86,22 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     in = info.depth_intrinsics;
     panel::SearchWindow window;
     if (truth) window = {truth->distance_m, truth->angle_deg};
-    panel::PrefetchSource ahead(&source, 4);  // read on one core, measure on the other
-    r = panel::ExtractPanel(ahead, in, params, window, box);
-    const camera::PanelMetrics known = m;
-    m = r.metrics;
-    m.bag = known.bag;
     const auto preset = info.options.find("Visual_Preset");
     const auto emitter = info.options.find("Emitter_Enabled");
     if (preset != info.options.end()) m.preset = io::PresetName(preset->second);
     if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
-    if (truth) {
-      m.distance_m = known.distance_m;
-      m.angle_deg = known.angle_deg;
-      m.light = known.light;
-      if (truth->preset) m.preset = *truth->preset;
-      if (truth->emitter) m.emitter = *truth->emitter;
-    }
+    panel::PrefetchSource ahead(&source, 4);  // read on one core, measure on the other
+    r = panel::ExtractPanel(ahead, in, params, window, box);
+    if (truth && truth->preset) m.preset = *truth->preset;
+    if (truth && truth->emitter) m.emitter = *truth->emitter;
+    const camera::PanelMetrics known = m;  // what the manifest and the bag say
+    m = r.metrics;
+    m.bag = known.bag;
+    m.light = known.light;
+    m.preset = known.preset;
+    m.emitter = known.emitter;
+    m.distance_m = known.distance_m;
+    m.angle_deg = known.angle_deg;
   } catch (const std::exception& e) {
     const std::string what = e.what();
     m.status = "error";
