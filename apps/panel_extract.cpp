@@ -1,0 +1,202 @@
+// panel_extract: finds the panel in RealSense recordings and writes one row of panel metrics per
+// recording (DESIGN.md's CSV), and optionally panels.json with what each detection found.
+#include <unistd.h>
+
+#include <atomic>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "io/atomic_file.h"
+#include "io/bag.h"
+#include "io/bag_list.h"
+#include "io/config_file.h"
+#include "io/manifest.h"
+#include "io/metrics_csv.h"
+#include "panel/extract.h"
+#include "panel/prefetch.h"
+
+using namespace depthbias;
+
+namespace {
+
+// A mistake on the command line: the message is followed by the usage line.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+const char* kUsage =
+    "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
+    "[--panels-out panels.json] [--jobs N] [--region-mode auto|box --boxes JSON] [--quiet] "
+    "BAG_OR_DIR...";
+
+class BagSource : public panel::FrameSource {
+ public:
+  explicit BagSource(std::string path) : path_(std::move(path)) { Rewind(); }
+  const io::BagInfo& info() const { return reader_->info(); }
+  bool Next(camera::DepthFrame* f) override { return reader_->Next(f); }
+  bool Rewind() override {
+    reader_ = std::make_unique<io::BagReader>(path_);
+    return true;
+  }
+
+ private:
+  std::string path_;
+  std::unique_ptr<io::BagReader> reader_;
+};
+
+struct Options {
+  std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
+  int jobs = 1;
+  bool quiet = false;
+  std::vector<std::string> inputs;
+};
+
+struct Job {
+  std::string path;
+  camera::PanelMetrics row;
+  std::string json;
+};
+
+void Run(Job* job, const Options& o, const panel::PanelParams& params,
+         const io::Manifest* manifest, const std::map<std::string, std::array<double, 4>>& boxes) {
+  camera::PanelMetrics& m = job->row;
+  const std::string name = io::BaseName(job->path);
+  m.bag = name;
+  panel::ExtractResult r;
+  camera::Intrinsics in;
+  try {
+    const io::ManifestRow* truth = manifest ? manifest->Find(job->path) : nullptr;
+    if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
+    if (truth) {
+      m.distance_m = truth->distance_m;
+      m.angle_deg = truth->angle_deg;
+      m.light = truth->light;
+    }
+    std::optional<panel::PixelBox> box;
+    if (o.mode == "box") {
+      const auto b = boxes.find(name);
+      if (b == boxes.end()) throw std::runtime_error("no box for it in " + o.boxes);
+      box = panel::PixelBox{b->second[0], b->second[1], b->second[2], b->second[3]};
+    }
+    BagSource source(job->path);
+    const io::BagInfo& info = source.info();
+    if (!info.has_depth_intrinsics) throw std::runtime_error("no depth intrinsics recorded");
+    in = info.depth_intrinsics;
+    panel::SearchWindow window;
+    if (truth) window = {truth->distance_m, truth->angle_deg};
+    const auto preset = info.options.find("Visual_Preset");
+    const auto emitter = info.options.find("Emitter_Enabled");
+    if (preset != info.options.end()) m.preset = io::PresetName(preset->second);
+    if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
+    panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
+    r = panel::ExtractPanel(ahead, in, params, window, box);
+    if (truth && truth->preset) m.preset = *truth->preset;
+    if (truth && truth->emitter) m.emitter = *truth->emitter;
+    const camera::PanelMetrics known = m;  // what the manifest and the bag say
+    m = r.metrics;
+    m.bag = known.bag;
+    m.light = known.light;
+    m.preset = known.preset;
+    m.emitter = known.emitter;
+    m.distance_m = known.distance_m;
+    m.angle_deg = known.angle_deg;
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    m.status = "error";
+    m.message = what.rfind(job->path, 0) == 0 ? what : job->path + ": " + what;
+  }
+  r.metrics = m;
+  job->json = panel::DetectionJson(r, in, "\"bag\": \"" + name + "\"");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  panel::PanelParams params;
+  std::unique_ptr<io::Manifest> manifest;
+  std::map<std::string, std::array<double, 4>> boxes;
+  std::vector<Job> jobs;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw UsageError(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--manifest") o.manifest = value();
+      else if (a == "--config") o.config = value();
+      else if (a == "--out") o.out = value();
+      else if (a == "--panels-out") o.panels_out = value();
+      else if (a == "--boxes") o.boxes = value();
+      else if (a == "--region-mode") o.mode = value();
+      else if (a == "--jobs") o.jobs = std::max(1, std::atoi(value().c_str()));
+      else if (a == "--quiet") o.quiet = true;
+      else if (a == "--help" || a == "-h") return std::cout << kUsage << "\n", 0;
+      else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
+      else o.inputs.push_back(a);
+    }
+    if (o.inputs.empty()) throw UsageError("no recording given");
+    if (o.mode != "auto" && o.mode != "box") throw UsageError("--region-mode auto|box");
+    if (o.mode == "box" && o.boxes.empty()) throw UsageError("box mode needs --boxes");
+    if (!o.config.empty()) {
+      for (const io::ConfigEntry& e : io::ReadConfigScalars(o.config)) {
+        std::string why;
+        if (!params.Set(e.key, e.value, &why))
+          throw std::runtime_error(o.config + ":" + std::to_string(e.line) + ": " + why);
+      }
+    }
+    std::string why;
+    if (!params.IsValid(&why)) throw std::runtime_error(o.config + ": " + why);
+    if (!o.manifest.empty()) manifest = std::make_unique<io::Manifest>(io::ReadManifest(o.manifest));
+    if (!o.boxes.empty()) boxes = io::ReadBoxes(o.boxes);
+    for (const std::string& path : io::ListBags(o.inputs)) jobs.push_back({path, {}, {}});
+  } catch (const UsageError& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n" << kUsage << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n";
+    return 2;
+  }
+
+  const bool progress = !o.quiet && isatty(STDERR_FILENO);
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex print;
+  auto worker = [&] {
+    for (std::size_t k; (k = next++) < jobs.size();) {
+      Run(&jobs[k], o, params, manifest.get(), boxes);
+      std::lock_guard<std::mutex> lock(print);
+      ++done;
+      if (!jobs[k].row.ok())
+        std::cerr << (progress ? "\r\033[K" : "") << jobs[k].row.bag << ": "
+                  << jobs[k].row.status << ": " << jobs[k].row.message << "\n";
+      if (progress)
+        std::cerr << "\r\033[K[" << done << "/" << jobs.size() << "] " << jobs[k].row.bag
+                  << std::flush;
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 0; t < std::min<int>(o.jobs, static_cast<int>(jobs.size())); ++t)
+    threads.emplace_back(worker);
+  for (std::thread& t : threads) t.join();
+  if (progress) std::cerr << "\r\033[K";
+
+  std::vector<camera::PanelMetrics> rows;
+  std::string json = "[\n";
+  bool all_ok = true;
+  for (const Job& j : jobs) {
+    rows.push_back(j.row);
+    json += (rows.size() > 1 ? ",\n" : "") + j.json;
+    all_ok = all_ok && j.row.ok();
+  }
+  try {
+    io::WriteMetricsCsv(o.out, rows);
+    if (!o.panels_out.empty()) io::WriteFileAtomic(o.panels_out, json + "\n]\n");
+  } catch (const std::exception& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n";
+    return 2;
+  }
+  return all_ok ? 0 : 1;
+}
