@@ -2,10 +2,13 @@
 //
 // The normal path: rosbag::Bag opens the bag and reads its index; one rosbag::View over the
 // metadata topics gives the device and sensor info, options, stream info and camera_info, and
-// one over the depth topic gives the frames one at a time. Each message's serialized bytes
-// (MessageInstance::write) are decoded with roscpp_serialization (bag_records.h), which also
-// reads the depth units librealsense appends after the image data. rosbag keeps a small index
-// entry per message and one chunk at a time, so memory stays flat however long the recording.
+// one over the depth topic gives the frames one at a time. Messages are decoded from their
+// serialized bytes with roscpp_serialization (bag_records.h): metadata from
+// MessageInstance::write(), depth frames in place in rosbag's chunk buffer through
+// MessageInstance::instantiate() (no sensor_msgs::Image copy of the pixels). The decoder reads
+// the serialized message to its end, so it also gets the depth units librealsense appends after
+// the image data. rosbag keeps a small index entry per message and one chunk at a time, so
+// memory stays flat however long the recording.
 //
 // rosbag trusts the file: a damaged size field makes it allocate or read without bound. So
 // before a file is handed to rosbag, a structural check walks its records without
@@ -18,11 +21,13 @@
 // with the same record reader, up to the damage.
 
 #include <bzlib.h>
+#include <console_bridge/console.h>
 #include <fcntl.h>
 #include <ros/exception.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/Image.h>
 #include <roslz4/lz4s.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -68,7 +73,42 @@ struct ByteSink {
   }
 };
 
+// A depth image as rosbag's MessageInstance::instantiate() sees it: instead of building a
+// sensor_msgs::Image (a copy of the pixels), its deserializer hands the serialized bytes, in
+// place in rosbag's chunk buffer, to the decoder of the frame being read.
+struct DepthImageBytes {};
+
+struct DepthDecoder {
+  virtual void Decode(const std::uint8_t* data, std::size_t size) = 0;
+  virtual ~DepthDecoder() = default;
+};
+thread_local DepthDecoder* tl_depth_decoder = nullptr;
+
 }  // namespace
+}  // namespace depthbias::io
+
+namespace ros {
+namespace message_traits {
+template <>
+struct MD5Sum<depthbias::io::DepthImageBytes> {
+  static const char* value() { return MD5Sum<sensor_msgs::Image>::value(); }
+  static const char* value(const depthbias::io::DepthImageBytes&) { return value(); }
+};
+}  // namespace message_traits
+namespace serialization {
+template <>
+struct Serializer<depthbias::io::DepthImageBytes> {
+  template <typename Stream>
+  static void read(Stream& stream, depthbias::io::DepthImageBytes&) {
+    const std::uint32_t size = stream.getLength();
+    const std::uint8_t* data = stream.advance(size);
+    depthbias::io::tl_depth_decoder->Decode(data, size);
+  }
+};
+}  // namespace serialization
+}  // namespace ros
+
+namespace depthbias::io {
 
 BagError::BagError(Kind kind, const std::string& file, const std::string& what)
     : std::runtime_error(OneLine(file + ": " + what)), kind_(kind), file_(file) {}
@@ -506,6 +546,9 @@ struct BagReader::Impl {
   }
 
   void OpenWithRosbag() {
+    // rosbag and ros::Header report some errors on the console before throwing; the library
+    // does not print (the exception carries the error).
+    console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
     bool first_seen = false;
     std::string where = "opening it with rosbag";
     try {
@@ -570,16 +613,29 @@ struct BagReader::Impl {
     if (!frames || next_frame == frames->end()) return false;
     const std::string where = "depth frame " + std::to_string(frames_read + 1) + " of " +
                               std::to_string(info.depth_frames);
+    struct Decoder : DepthDecoder {
+      const Impl* impl;
+      const std::string* where;
+      camera::DepthFrame* frame;
+      Decoder(const Impl* i, const std::string* w, camera::DepthFrame* f)
+          : impl(i), where(w), frame(f) {}
+      void Decode(const std::uint8_t* data, std::size_t size) override {
+        impl->DecodeDepth(data, size, *where, frame);
+      }
+    } decoder(this, &where, frame);
+    tl_depth_decoder = &decoder;
     try {
-      ReadMessage(*next_frame);
-    } catch (const FormatError& e) {
+      if (!next_frame->instantiate<DepthImageBytes>())
+        Fail(BagError::Kind::kCorrupt, where + ": is a " + next_frame->getDataType() +
+                                           " message, not a sensor_msgs/Image");
+    } catch (const ros::Exception& e) {  // rosbag::BagException and roscpp_serialization's
+      tl_depth_decoder = nullptr;
       Fail(BagError::Kind::kCorrupt, where + ": " + e.what());
-    } catch (const ros::Exception& e) {
-      Fail(BagError::Kind::kCorrupt, where + ": " + e.what());
-    } catch (const std::bad_alloc&) {
-      Fail(BagError::Kind::kCorrupt, where + ": out of memory");
+    } catch (...) {
+      tl_depth_decoder = nullptr;
+      throw;
     }
-    DecodeDepth(bytes.data(), bytes.size(), where, frame);
+    tl_depth_decoder = nullptr;
     ++next_frame;
     ++frames_read;
     return true;
