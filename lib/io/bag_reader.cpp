@@ -533,7 +533,8 @@ struct BagReader::Impl {
   }
 
   static bool IsMetadata(const std::string& topic, const TopicParts& t) {
-    if (t.device >= 0 && t.sensor < 0) return topic == "/device_" + std::to_string(t.device) + "/info";
+    if (t.device >= 0 && t.sensor < 0)
+      return topic == "/device_" + std::to_string(t.device) + "/info";
     if (t.sensor >= 0 && !t.option.empty()) return t.rest == "value" || t.rest == "description";
     return t.sensor >= 0 && (t.rest == "info" || t.rest == "info/camera_info");
   }
@@ -590,9 +591,10 @@ struct BagReader::Impl {
       // Device and sensor info, options, stream info and camera_info recorded up to the first
       // depth frame.
       where = "reading its recorded options and stream info";
-      rosbag::View metadata(
-          *bag, [](const rosbag::ConnectionInfo* c) { return IsMetadata(c->topic, ParseTopic(c->topic)); },
-          ros::TIME_MIN, first_time);
+      const auto is_metadata = [](const rosbag::ConnectionInfo* c) {
+        return IsMetadata(c->topic, ParseTopic(c->topic));
+      };
+      rosbag::View metadata(*bag, is_metadata, ros::TIME_MIN, first_time);
       for (const rosbag::MessageInstance& m : metadata) {
         where = "reading " + m.getTopic();
         ReadMessage(m);
