@@ -14,7 +14,10 @@
 // before a file is handed to rosbag, a structural check walks its records without
 // decompressing anything (record and chunk headers, the index, the per-chunk index data and,
 // in uncompressed chunks, the record of every indexed message). Errors rosbag raises while
-// reading (e.g. an LZ4 chunk whose data fails roslz4's checks) become BagError too.
+// reading (e.g. an LZ4 chunk whose data fails roslz4's checks) become BagError too. The check
+// does not look inside compressed chunks: there it only knows that each indexed message starts
+// inside its chunk, and rosbag trusts the record it finds there (an index damaged to point into
+// the middle of a message in an LZ4 chunk can make rosbag read past its chunk buffer).
 //
 // rosbag refuses a bag without its index (cut short, never closed) and one that fails the
 // check. With ReadOptions::allow_partial such a bag is read by scanning its chunks in order
