@@ -45,6 +45,7 @@
 
 #include "io/bag.h"
 #include "io/bag_records.h"
+#include "io/rosbag_guard.h"
 
 namespace depthbias::io {
 namespace {
@@ -162,7 +163,7 @@ struct BagReader::Impl {
   std::vector<std::uint8_t> bytes;  // serialized message being decoded
 
   // rosbag path.
-  std::unique_ptr<rosbag::Bag> bag;
+  std::unique_ptr<bag_detail::GuardedBag> bag;
   std::unique_ptr<rosbag::View> frames;
   rosbag::View::iterator next_frame;
   std::uint64_t frames_read = 0;
@@ -556,10 +557,10 @@ struct BagReader::Impl {
     bool first_seen = false;
     std::string where = "opening it with rosbag";
     try {
-      bag = std::make_unique<rosbag::Bag>();
-      bag->open(path, rosbag::bagmode::Read);
+      bag = std::make_unique<bag_detail::GuardedBag>();
+      bag->Open(path, rosbag::bagmode::Read);
       where = "reading its index with rosbag";
-      rosbag::View all(*bag);
+      rosbag::View all(**bag);
       for (const rosbag::ConnectionInfo* c : all.getConnections()) {
         Connection& conn = conns[c->id];
         conn.topic = c->topic;
@@ -567,7 +568,7 @@ struct BagReader::Impl {
       }
       for (auto& [id, conn] : conns) {
         const std::uint32_t want = id;
-        rosbag::View one(*bag, [want](const rosbag::ConnectionInfo* c) { return c->id == want; });
+        rosbag::View one(**bag, [want](const rosbag::ConnectionInfo* c) { return c->id == want; });
         conn.messages = one.size();
       }
       ChooseDepth();
@@ -575,7 +576,7 @@ struct BagReader::Impl {
       if (has_depth) {
         const std::uint32_t want = depth_conn;
         frames = std::make_unique<rosbag::View>(
-            *bag, [want](const rosbag::ConnectionInfo* c) { return c->id == want; });
+            **bag, [want](const rosbag::ConnectionInfo* c) { return c->id == want; });
         rosbag::View::iterator it = frames->begin();
         if (it != frames->end()) {
           where = "reading its first depth frame";
@@ -597,7 +598,7 @@ struct BagReader::Impl {
       const auto is_metadata = [](const rosbag::ConnectionInfo* c) {
         return IsMetadata(c->topic, ParseTopic(c->topic));
       };
-      rosbag::View metadata(*bag, is_metadata, ros::TIME_MIN, first_time);
+      rosbag::View metadata(**bag, is_metadata, ros::TIME_MIN, first_time);
       for (const rosbag::MessageInstance& m : metadata) {
         where = "reading " + m.getTopic();
         ReadMessage(m);

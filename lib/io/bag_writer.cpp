@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "io/bag.h"
+#include "io/rosbag_guard.h"
 
 namespace depthbias::io {
 namespace bag_detail {
@@ -163,7 +164,7 @@ struct BagWriter::Impl {
   std::string path;
   std::string temp_path;
   BagWriterConfig config;
-  rosbag::Bag bag;
+  bag_detail::GuardedBag bag;
   bool open = false;
   bool have_first = false;
   double first_ms = 0.0;
@@ -179,7 +180,7 @@ struct BagWriter::Impl {
   void Put(const std::string& topic, std::uint64_t time_ns, const RawMessage& m) {
     ros::Time t;
     t.fromNSec(std::max<std::uint64_t>(time_ns, 1));
-    bag.write(topic, t, m);
+    bag->write(topic, t, m);
   }
 
   void WriteStatic() {
@@ -253,12 +254,12 @@ BagWriter::BagWriter(const std::string& path, BagWriterConfig config) : impl_(ne
   if (!d.config.IsValid(&why)) d.Fail(why);
   d.temp_path = path + ".part";
   try {
-    d.bag.open(d.temp_path, rosbag::bagmode::Write);
+    d.bag.Open(d.temp_path, rosbag::bagmode::Write);
     d.open = true;
-    if (d.config.compress_lz4) d.bag.setCompression(rosbag::compression::LZ4);
+    if (d.config.compress_lz4) d.bag->setCompression(rosbag::compression::LZ4);
     d.WriteStatic();
   } catch (const std::exception& e) {
-    if (d.open) d.bag.close();
+    if (d.open) d.bag.Close();
     std::remove(d.temp_path.c_str());
     d.Fail(std::string("cannot write: ") + e.what());
   }
@@ -322,7 +323,7 @@ void BagWriter::Close() {
   if (!d.open) return;
   d.open = false;
   try {
-    d.bag.close();
+    d.bag.Close();
   } catch (const std::exception& e) {
     std::remove(d.temp_path.c_str());
     d.Fail(std::string("cannot close: ") + e.what());

@@ -76,8 +76,9 @@ std::vector<PanelMetrics> ParseMetricsCsv(const std::string& text, const std::st
     for (size_t i = 0; i < num_col.size(); ++i) {
       if (num_col[i] < 0) continue;
       const std::string name = kNumbers[i].name;
-      const bool required = name == "distance_m" || name == "angle_deg" ||
-                            (m.ok() && (name == "median_m" || name == "mean_m"));
+      // Ground truth (distance_m, angle_deg) may be empty: panel_extract run without a manifest
+      // measures a recording it knows nothing about. Fitting skips such rows.
+      const bool required = m.ok() && (name == "median_m" || name == "mean_m");
       m.*(kNumbers[i].field) =
           required ? t.RequiredNumber(r, num_col[i]) : t.Number(r, num_col[i]);
     }

@@ -27,7 +27,14 @@ FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
     report.message = why;
     return report;
   }
-  for (const auto& r : rows) (r.ok() ? report.rows_used : report.rows_skipped)++;
+  for (const auto& r : rows) {
+    if (r.ok() && !UsableForFit(r)) {
+      report.message = "bag '" + r.bag + "' has no ground truth (distance_m or angle_deg " +
+                       "empty): measure it with a manifest";
+      return report;
+    }
+    (UsableForFit(r) ? report.rows_used : report.rows_skipped)++;
+  }
   if (report.rows_used == 0) {
     report.message = "no row with status ok to fit";
     return report;

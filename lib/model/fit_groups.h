@@ -39,7 +39,7 @@ struct FitReport {
   std::vector<std::string> warnings;  // cross-validations that could not run (fit still done)
   std::vector<GroupReport> groups;
   int rows_used = 0;
-  int rows_skipped = 0;      // rows whose status is not "ok"
+  int rows_skipped = 0;      // rows whose status is not "ok" (failed measurements)
   double seconds = 0.0;      // wall time of fits and cross-validation
 };
 

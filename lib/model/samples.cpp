@@ -71,7 +71,7 @@ std::vector<Group> GroupRows(const std::vector<camera::PanelMetrics>& rows,
   std::map<std::tuple<std::string, std::string, std::string>, Group> groups;
   for (size_t i = 0; i < rows.size(); ++i) {
     const auto& r = rows[i];
-    if (!r.ok()) continue;
+    if (!UsableForFit(r)) continue;
     const auto key = std::make_tuple(by_light ? r.light : "*", by_preset ? r.preset : "*",
                                      by_emitter ? r.emitter : "*");
     Group& g = groups[key];

@@ -1,6 +1,7 @@
 #pragma once
 // From panel-metrics rows to fit samples, and rows into scenario groups.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -32,12 +33,17 @@ struct Group {
   std::string light = "*";    // "*" where light is not a grouping key
   std::string preset = "*";
   std::string emitter = "*";
-  std::vector<size_t> rows;   // indices of "ok" rows
+  std::vector<size_t> rows;   // indices of rows UsableForFit
   std::string Label() const;  // "daylight/HA"
 };
 
+// A row can be fitted when it was measured ("ok") and has its ground truth (distance, angle).
+inline bool UsableForFit(const camera::PanelMetrics& r) {
+  return r.ok() && std::isfinite(r.distance_m) && std::isfinite(r.angle_deg);
+}
+
 // Keys allowed: light, preset, emitter (any subset, none = one group). Throws
-// std::invalid_argument naming an unknown key. Rows whose status is not "ok" are left out.
+// std::invalid_argument naming an unknown key. Rows that are not UsableForFit are left out.
 // Groups come out sorted by their keys.
 std::vector<Group> GroupRows(const std::vector<camera::PanelMetrics>& rows,
                              const std::vector<std::string>& group_by);

@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "camera/intrinsics.h"
@@ -257,6 +258,35 @@ TEST(RecordedBagRechunked, OneMessagePerChunkGivesTheSameFrames) {
       EXPECT_TRUE(std::equal(pixels.begin(), pixels.end(), f.counts.begin())) << i;
     }
     EXPECT_EQ(i, truth.node["frames"].size()) << "lz4 " << lz4;
+  }
+}
+
+// rosbag::Bag loads a plugin through class_loader, which is not thread-safe on its own; a batch
+// reads several recordings at once, so readers on several threads must all succeed.
+TEST(RecordedBagThreads, ReadersOnSeveralThreadsAtOnce) {
+  const std::vector<std::string> names = {"d455_depth_1mm.bag", "d455_depth_100um_lz4.bag",
+                                          "d455_depth_color_imu.bag",
+                                          "d455_depth_color_imu_lz4.bag"};
+  std::vector<std::string> errors(names.size());
+  std::vector<int> frames(names.size(), 0);
+  std::vector<std::thread> threads;
+  for (size_t t = 0; t < names.size(); ++t) {
+    threads.emplace_back([&, t] {
+      try {
+        for (int round = 0; round < 8; ++round) {
+          BagReader reader(FixturePath(names[t]));
+          camera::DepthFrame f;
+          while (reader.Next(&f)) ++frames[t];
+        }
+      } catch (const std::exception& e) {
+        errors[t] = e.what();
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (size_t t = 0; t < names.size(); ++t) {
+    EXPECT_EQ(errors[t], "") << names[t];
+    EXPECT_GT(frames[t], 0) << names[t];
   }
 }
 

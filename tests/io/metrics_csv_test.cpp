@@ -102,10 +102,18 @@ TEST(MetricsCsv, NaNInRequiredColumnNamesRowAndColumn) {
                                 "y,d,on,HA,8,0,10,8,,0.1,1,99\n");
   EXPECT_NE(e.find("m.csv:3"), std::string::npos) << e;
   EXPECT_NE(e.find("median_m"), std::string::npos) << e;
-  const std::string e2 = ErrorOf(std::string(kHeader12) + "x,d,on,HA,nan,0,10,4,4,0.1,1,99\n");
-  EXPECT_NE(e2.find("distance_m"), std::string::npos) << e2;
+  const std::string e2 = ErrorOf(std::string(kHeader12) + "x,d,on,HA,4,0,10,4,nan,0.1,1,99\n");
+  EXPECT_NE(e2.find("median_m"), std::string::npos) << e2;
   const std::string e3 = ErrorOf(std::string(kHeader12) + "x,d,on,HA,4,zero,10,4,4,0.1,1,99\n");
   EXPECT_NE(e3.find("'zero' is not a number"), std::string::npos) << e3;
+}
+
+TEST(MetricsCsv, RowsMeasuredWithoutManifestHaveNoGroundTruth) {
+  const auto rows = ParseMetricsCsv(std::string(kHeader12) + "x,,,HA,,,10,4,4,0.1,1,99\n", "m.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_TRUE(std::isnan(rows[0].distance_m));
+  EXPECT_TRUE(std::isnan(rows[0].angle_deg));
+  EXPECT_DOUBLE_EQ(rows[0].median_m, 4.0);
 }
 
 TEST(MetricsCsv, FailedRowsMayLackMeasurements) {

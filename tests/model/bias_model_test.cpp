@@ -39,6 +39,21 @@ camera::BiasWeights Weights() {
   return ToWeights(report, p);
 }
 
+TEST(FitGroups, RefusesMeasuredRowsWithoutGroundTruthAndSkipsFailedOnes) {
+  auto rows = Rows();
+  rows[3].status = "no_panel";
+  rows[3].distance_m = camera::PanelMetrics::kMissing;
+  FitGroupsParams p;
+  const FitReport skipped = FitGroups(rows, p);
+  ASSERT_TRUE(skipped.success) << skipped.message;
+  EXPECT_EQ(skipped.rows_skipped, 1);
+  rows[5].angle_deg = camera::PanelMetrics::kMissing;
+  const FitReport refused = FitGroups(rows, p);
+  EXPECT_FALSE(refused.success);
+  EXPECT_NE(refused.message.find(rows[5].bag), std::string::npos) << refused.message;
+  EXPECT_NE(refused.message.find("ground truth"), std::string::npos) << refused.message;
+}
+
 TEST(BiasModel, ReproducesTheFitAndCorrectsTowardsTruth) {
   const auto rows = Rows();
   FitGroupsParams p;
