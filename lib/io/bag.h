@@ -47,20 +47,28 @@ struct StreamInfo {
   std::string encoding;     // e.g. mono16, rgb8; empty for non-image streams
   int width = 0;
   int height = 0;
+  int fps = 0;              // nominal rate [Hz], 0 when not recorded
   std::uint64_t messages = 0;
 };
 
 struct BagInfo {
   std::string file;
   bool compressed = false;            // LZ4 or BZ2 chunks
+  bool indexed = true;                // false when read without its index (partial read)
   std::vector<StreamInfo> streams;
   StreamInfo depth;                   // the depth stream
   camera::Intrinsics depth_intrinsics;
-  double depth_units_m = 0.001;       // Depth_Units option, or the first frame's own units
+  bool has_depth_intrinsics = false;  // false when the bag holds no camera_info for the stream
+  double depth_units_m = 0.001;       // the first frame's own units, else Depth_Units, else 0.001
   std::uint64_t depth_frames = 0;
-  double first_timestamp_ms = 0.0;
+  double first_timestamp_ms = 0.0;    // device timestamps of the first and last depth frames
   double last_timestamp_ms = 0.0;
-  std::map<std::string, double> options;       // depth sensor's recorded options, as recorded
+  // The depth sensor's recorded options as of its first frame, names as recorded
+  // (Visual_Preset, Emitter_Enabled, Laser_Power, Depth_Units, ...); values are float32 in
+  // the bag. On the D455 Visual_Preset 3 is High Accuracy and 4 is High Density.
+  std::map<std::string, double> options;
+  std::map<std::string, std::string> option_descriptions;
+  std::map<std::string, std::string> sensor;   // depth sensor's info ("Name", ...)
   std::map<std::string, std::string> device;   // "Name", "Serial Number", "Firmware Version", ...
 };
 

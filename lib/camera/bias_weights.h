@@ -1,0 +1,51 @@
+#pragma once
+// The record of a fitted bias model, as the weights YAML holds it (DESIGN.md "File formats"):
+// a plain value type shared by model (which fits and evaluates it) and io (which reads and
+// writes it), so that neither depends on the other.
+
+#include <string>
+#include <vector>
+
+namespace depthbias::camera {
+
+struct BiasCrossValidation {
+  std::string scheme;   // "point" (leave one test point out), "distance", or "none"
+  double rmse_m = 0.0;  // of the held-out bias predictions
+  double mae_m = 0.0;
+};
+
+// One fitted scenario (a group of rows, e.g. one light and preset).
+struct BiasWeightsGroup {
+  std::string light;   // the group's light, or "*" when light is not a grouping key
+  std::string preset;  // the group's preset, or "*"
+  std::string emitter; // the group's emitter when it is a grouping key, else "*"
+  int n = 0;           // rows fitted
+  std::vector<std::string> names;       // parameter names in the model's order
+  std::vector<double> values;           // fitted values, same order
+  std::vector<double> knots_deg;        // off-axis knots of knot-based forms, else empty
+  double rmse_m = 0.0;                  // in-sample
+  double mae_m = 0.0;
+  double residual_std_m = 0.0;          // sqrt(RSS / (n − p)): the unexplained scatter
+  std::vector<BiasCrossValidation> cv;  // one entry per scheme run
+  std::vector<std::vector<double>> covariance;  // of values, names × names; empty if unknown
+};
+
+struct BiasWeights {
+  std::string schema = "depthbias.weights/1";
+  std::string model;   // "paper6", "disp_scale", ...
+  std::string target = "median_m - distance_m";  // what the bias means
+  double lambda = 0.0;  // default prior strength of the fit
+  std::string loss = "none";
+  double loss_scale_m = 1.0;
+  double focal_px = 0.0;    // constants of disparity-space forms
+  double baseline_m = 0.0;
+  std::vector<std::string> group_by;  // e.g. {"light", "preset"}
+  std::vector<BiasWeightsGroup> groups;
+  // Provenance.
+  std::string input_file;
+  std::string input_sha256;
+  std::string tool;
+  std::string tool_version;
+};
+
+}  // namespace depthbias::camera

@@ -1,0 +1,25 @@
+#pragma once
+// Outputs are never left half-written: they go to a temporary file in the destination's own
+// folder (same file system), are flushed, and then renamed over the destination in one step.
+
+#include <string>
+
+#include "io/io_error.h"
+
+namespace depthbias::io {
+
+// Writes `contents` to `path` atomically (temp file in the same folder, then rename).
+// Throws IoError naming the file if the folder is missing or not writable; on any failure
+// the destination is left as it was and no temporary file remains.
+void WriteFileAtomic(const std::string& path, const std::string& contents);
+
+// Reads a whole file. Throws IoError naming the file if it is missing, a folder or unreadable.
+std::string ReadFile(const std::string& path);
+
+// True if `path` names an existing regular file.
+bool FileExists(const std::string& path);
+
+// The last path component ("a/b/c.bag" → "c.bag").
+std::string BaseName(const std::string& path);
+
+}  // namespace depthbias::io

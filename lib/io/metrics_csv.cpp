@@ -1,0 +1,113 @@
+#include "io/metrics_csv.h"
+
+#include <cmath>
+
+#include "io/atomic_file.h"
+#include "io/csv.h"
+
+namespace depthbias::io {
+namespace {
+
+using camera::PanelMetrics;
+
+struct NumberColumn {
+  const char* name;
+  double PanelMetrics::*field;
+};
+
+// Numeric columns in DESIGN.md's order, after the four text columns.
+const NumberColumn kNumbers[] = {
+    {"distance_m", &PanelMetrics::distance_m},
+    {"angle_deg", &PanelMetrics::angle_deg},
+    {"frames", &PanelMetrics::frames},
+    {"mean_m", &PanelMetrics::mean_m},
+    {"median_m", &PanelMetrics::median_m},
+    {"plane_std_m", &PanelMetrics::plane_std_m},
+    {"hole_rate_pct", &PanelMetrics::hole_rate_pct},
+    {"valid_pct", &PanelMetrics::valid_pct},
+    {"range_m", &PanelMetrics::range_m},
+    {"azimuth_deg", &PanelMetrics::azimuth_deg},
+    {"elevation_deg", &PanelMetrics::elevation_deg},
+    {"normal_tilt_deg", &PanelMetrics::normal_tilt_deg},
+    {"panel_width_m", &PanelMetrics::panel_width_m},
+    {"panel_height_m", &PanelMetrics::panel_height_m},
+    {"region_px", &PanelMetrics::region_px},
+    {"subpixel_rms_px", &PanelMetrics::subpixel_rms_px},
+    {"temporal_std_m", &PanelMetrics::temporal_std_m},
+};
+constexpr int kArticleNumbers = 8;  // distance_m … valid_pct
+
+}  // namespace
+
+const std::vector<std::string>& MetricsColumns() {
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> c = {"bag", "light", "emitter", "preset"};
+    for (const auto& n : kNumbers) c.push_back(n.name);
+    c.push_back("status");
+    c.push_back("message");
+    return c;
+  }();
+  return columns;
+}
+
+std::vector<PanelMetrics> ParseMetricsCsv(const std::string& text, const std::string& file) {
+  const CsvTable t = ParseCsv(text, file);
+  const int bag = t.RequireColumn("bag");
+  const int light = t.RequireColumn("light");
+  const int emitter = t.RequireColumn("emitter");
+  const int preset = t.RequireColumn("preset");
+  std::vector<int> num_col;
+  for (int i = 0; i < static_cast<int>(std::size(kNumbers)); ++i) {
+    num_col.push_back(i < kArticleNumbers ? t.RequireColumn(kNumbers[i].name)
+                                          : t.Column(kNumbers[i].name));
+  }
+  const int status = t.Column("status");
+  const int message = t.Column("message");
+  std::vector<PanelMetrics> out;
+  out.reserve(t.rows.size());
+  for (size_t r = 0; r < t.rows.size(); ++r) {
+    PanelMetrics m;
+    m.bag = t.Cell(r, bag);
+    m.light = t.Cell(r, light);
+    m.emitter = t.Cell(r, emitter);
+    m.preset = t.Cell(r, preset);
+    if (status >= 0 && !t.Cell(r, status).empty()) m.status = t.Cell(r, status);
+    m.message = t.Cell(r, message);
+    for (size_t i = 0; i < num_col.size(); ++i) {
+      if (num_col[i] < 0) continue;
+      const std::string name = kNumbers[i].name;
+      const bool required = name == "distance_m" || name == "angle_deg" ||
+                            (m.ok() && (name == "median_m" || name == "mean_m"));
+      m.*(kNumbers[i].field) =
+          required ? t.RequiredNumber(r, num_col[i]) : t.Number(r, num_col[i]);
+    }
+    if (m.bag.empty()) throw IoError(t.Where(r) + ": column 'bag': empty");
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+std::vector<PanelMetrics> ReadMetricsCsv(const std::string& path) {
+  return ParseMetricsCsv(ReadFile(path), path);
+}
+
+std::vector<std::string> MetricsCells(const PanelMetrics& m) {
+  std::vector<std::string> cells = {m.bag, m.light, m.emitter, m.preset};
+  for (const auto& n : kNumbers) cells.push_back(CsvNumber(m.*(n.field)));
+  cells.push_back(m.status);
+  cells.push_back(m.message);
+  return cells;
+}
+
+std::string FormatMetricsCsv(const std::vector<PanelMetrics>& rows) {
+  std::vector<std::vector<std::string>> cells;
+  cells.reserve(rows.size());
+  for (const auto& m : rows) cells.push_back(MetricsCells(m));
+  return FormatCsv(MetricsColumns(), cells);
+}
+
+void WriteMetricsCsv(const std::string& path, const std::vector<PanelMetrics>& rows) {
+  WriteFileAtomic(path, FormatMetricsCsv(rows));
+}
+
+}  // namespace depthbias::io

@@ -1,0 +1,234 @@
+#include "io/weights_yaml.h"
+
+#include <cmath>
+
+#include <yaml-cpp/yaml.h>
+
+#include "io/atomic_file.h"
+#include "io/csv.h"
+
+namespace depthbias::io {
+namespace {
+
+constexpr const char* kSchema = "depthbias.weights/1";
+
+std::string Num(double v) {
+  if (std::isnan(v)) return ".nan";
+  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
+  return CsvNumber(v);
+}
+
+// Reading with errors that name the file and the key.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+  [[noreturn]] void Fail(const std::string& key, const std::string& what) const {
+    throw IoError(file_ + ": " + (key.empty() ? "" : "key '" + key + "': ") + what);
+  }
+  YAML::Node Need(const YAML::Node& parent, const std::string& name,
+                  const std::string& path) const {
+    const YAML::Node n = parent[name];
+    if (!n) Fail(path, "missing");
+    return n;
+  }
+  double Double(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) Fail(path, "expected a number");
+    try {
+      return n.as<double>();
+    } catch (const YAML::Exception&) {
+      Fail(path, "'" + n.Scalar() + "' is not a number");
+    }
+  }
+  int Int(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) Fail(path, "expected an integer");
+    try {
+      return n.as<int>();
+    } catch (const YAML::Exception&) {
+      Fail(path, "'" + n.Scalar() + "' is not an integer");
+    }
+  }
+  std::string String(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) Fail(path, "expected a text value");
+    return n.Scalar();
+  }
+  std::vector<double> Doubles(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsSequence()) Fail(path, "expected a list of numbers");
+    std::vector<double> v;
+    for (size_t i = 0; i < n.size(); ++i) {
+      v.push_back(Double(n[i], path + "[" + std::to_string(i) + "]"));
+    }
+    return v;
+  }
+  camera::BiasCrossValidation Cv(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsMap()) Fail(path, "expected a map {scheme, rmse_m, mae_m}");
+    return {String(Need(n, "scheme", path + ".scheme"), path + ".scheme"),
+            Double(Need(n, "rmse_m", path + ".rmse_m"), path + ".rmse_m"),
+            Double(Need(n, "mae_m", path + ".mae_m"), path + ".mae_m")};
+  }
+
+ private:
+  std::string file_;
+};
+
+}  // namespace
+
+std::string FormatWeightsYaml(const camera::BiasWeights& w) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "schema" << YAML::Value << kSchema;
+  out << YAML::Key << "model" << YAML::Value << w.model;
+  out << YAML::Key << "target" << YAML::Value << w.target;
+  out << YAML::Key << "lambda" << YAML::Value << Num(w.lambda);
+  out << YAML::Key << "loss" << YAML::Value << w.loss;
+  out << YAML::Key << "loss_scale_m" << YAML::Value << Num(w.loss_scale_m);
+  out << YAML::Key << "focal_px" << YAML::Value << Num(w.focal_px);
+  out << YAML::Key << "baseline_m" << YAML::Value << Num(w.baseline_m);
+  out << YAML::Key << "group_by" << YAML::Value << YAML::Flow << w.group_by;
+  out << YAML::Key << "groups" << YAML::Value << YAML::BeginSeq;
+  for (const auto& g : w.groups) {
+    out << YAML::BeginMap;
+    out << YAML::Key << "light" << YAML::Value << g.light;
+    out << YAML::Key << "preset" << YAML::Value << g.preset;
+    if (g.emitter != "*") out << YAML::Key << "emitter" << YAML::Value << g.emitter;
+    out << YAML::Key << "n" << YAML::Value << g.n;
+    out << YAML::Key << "weights" << YAML::Value << YAML::BeginMap;
+    for (size_t j = 0; j < g.names.size(); ++j) {
+      out << YAML::Key << g.names[j] << YAML::Value << Num(g.values.at(j));
+    }
+    out << YAML::EndMap;
+    if (!g.knots_deg.empty()) {
+      out << YAML::Key << "knots_deg" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (double k : g.knots_deg) out << Num(k);
+      out << YAML::EndSeq;
+    }
+    out << YAML::Key << "rmse_m" << YAML::Value << Num(g.rmse_m);
+    out << YAML::Key << "mae_m" << YAML::Value << Num(g.mae_m);
+    out << YAML::Key << "residual_std_m" << YAML::Value << Num(g.residual_std_m);
+    auto cv_map = [&out](const camera::BiasCrossValidation& cv) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "scheme" << YAML::Value << cv.scheme
+          << YAML::Key << "rmse_m" << YAML::Value << Num(cv.rmse_m) << YAML::Key << "mae_m"
+          << YAML::Value << Num(cv.mae_m) << YAML::EndMap;
+    };
+    out << YAML::Key << "cv" << YAML::Value;
+    cv_map(g.cv.empty() ? camera::BiasCrossValidation{"none", NAN, NAN} : g.cv.front());
+    if (g.cv.size() > 1) {
+      out << YAML::Key << "cv_more" << YAML::Value << YAML::BeginSeq;
+      for (size_t i = 1; i < g.cv.size(); ++i) cv_map(g.cv[i]);
+      out << YAML::EndSeq;
+    }
+    out << YAML::Key << "covariance" << YAML::Value << YAML::BeginSeq;
+    for (const auto& row : g.covariance) {
+      out << YAML::Flow << YAML::BeginSeq;
+      for (double v : row) out << Num(v);
+      out << YAML::EndSeq;
+    }
+    out << YAML::EndSeq;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "provenance" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "input_file" << YAML::Value << w.input_file;
+  out << YAML::Key << "input_sha256" << YAML::Value << w.input_sha256;
+  out << YAML::Key << "tool" << YAML::Value << w.tool;
+  out << YAML::Key << "tool_version" << YAML::Value << w.tool_version;
+  out << YAML::EndMap;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+void WriteWeightsYaml(const std::string& path, const camera::BiasWeights& weights) {
+  WriteFileAtomic(path, FormatWeightsYaml(weights));
+}
+
+camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file) {
+  const Reader r(file);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw IoError(file + ": not valid YAML (line " + std::to_string(e.mark.line + 1) + ": " +
+                  e.msg + ")");
+  }
+  if (!root.IsMap()) r.Fail("", "not a depthbias weights file (expected a YAML map)");
+  if (!root["schema"] || !root["schema"].IsScalar() || root["schema"].Scalar() != kSchema) {
+    r.Fail("schema", std::string("not a depthbias weights file (expected schema: ") + kSchema +
+                         ")");
+  }
+  camera::BiasWeights w;
+  w.schema = kSchema;
+  w.model = r.String(r.Need(root, "model", "model"), "model");
+  if (root["target"]) w.target = r.String(root["target"], "target");
+  w.lambda = r.Double(r.Need(root, "lambda", "lambda"), "lambda");
+  if (root["loss"]) w.loss = r.String(root["loss"], "loss");
+  if (root["loss_scale_m"]) w.loss_scale_m = r.Double(root["loss_scale_m"], "loss_scale_m");
+  if (root["focal_px"]) w.focal_px = r.Double(root["focal_px"], "focal_px");
+  if (root["baseline_m"]) w.baseline_m = r.Double(root["baseline_m"], "baseline_m");
+  if (root["group_by"]) {
+    const YAML::Node gb = root["group_by"];
+    if (!gb.IsSequence()) r.Fail("group_by", "expected a list");
+    for (size_t i = 0; i < gb.size(); ++i) {
+      w.group_by.push_back(r.String(gb[i], "group_by[" + std::to_string(i) + "]"));
+    }
+  }
+  const YAML::Node groups = r.Need(root, "groups", "groups");
+  if (!groups.IsSequence() || groups.size() == 0) r.Fail("groups", "expected a non-empty list");
+  for (size_t i = 0; i < groups.size(); ++i) {
+    const std::string p = "groups[" + std::to_string(i) + "]";
+    const YAML::Node gn = groups[i];
+    if (!gn.IsMap()) r.Fail(p, "expected a map");
+    camera::BiasWeightsGroup g;
+    g.light = r.String(r.Need(gn, "light", p + ".light"), p + ".light");
+    g.preset = r.String(r.Need(gn, "preset", p + ".preset"), p + ".preset");
+    if (gn["emitter"]) g.emitter = r.String(gn["emitter"], p + ".emitter");
+    g.n = r.Int(r.Need(gn, "n", p + ".n"), p + ".n");
+    const YAML::Node wn = r.Need(gn, "weights", p + ".weights");
+    if (!wn.IsMap() || wn.size() == 0) r.Fail(p + ".weights", "expected a map name: value");
+    for (const auto& kv : wn) {
+      const std::string name = kv.first.as<std::string>();
+      g.names.push_back(name);
+      g.values.push_back(r.Double(kv.second, p + ".weights." + name));
+    }
+    if (gn["knots_deg"]) g.knots_deg = r.Doubles(gn["knots_deg"], p + ".knots_deg");
+    g.rmse_m = r.Double(r.Need(gn, "rmse_m", p + ".rmse_m"), p + ".rmse_m");
+    g.mae_m = r.Double(r.Need(gn, "mae_m", p + ".mae_m"), p + ".mae_m");
+    if (gn["residual_std_m"]) {
+      g.residual_std_m = r.Double(gn["residual_std_m"], p + ".residual_std_m");
+    }
+    if (gn["cv"]) {
+      const auto cv = r.Cv(gn["cv"], p + ".cv");
+      if (cv.scheme != "none") g.cv.push_back(cv);
+    }
+    if (gn["cv_more"]) {
+      const YAML::Node more = gn["cv_more"];
+      if (!more.IsSequence()) r.Fail(p + ".cv_more", "expected a list");
+      for (size_t k = 0; k < more.size(); ++k) {
+        g.cv.push_back(r.Cv(more[k], p + ".cv_more[" + std::to_string(k) + "]"));
+      }
+    }
+    if (gn["covariance"]) {
+      const YAML::Node cn = gn["covariance"];
+      if (!cn.IsSequence()) r.Fail(p + ".covariance", "expected a list of rows");
+      for (size_t k = 0; k < cn.size(); ++k) {
+        g.covariance.push_back(r.Doubles(cn[k], p + ".covariance[" + std::to_string(k) + "]"));
+      }
+    }
+    w.groups.push_back(std::move(g));
+  }
+  if (const YAML::Node prov = root["provenance"]; prov && prov.IsMap()) {
+    if (prov["input_file"]) w.input_file = r.String(prov["input_file"], "provenance.input_file");
+    if (prov["input_sha256"]) {
+      w.input_sha256 = r.String(prov["input_sha256"], "provenance.input_sha256");
+    }
+    if (prov["tool"]) w.tool = r.String(prov["tool"], "provenance.tool");
+    if (prov["tool_version"]) {
+      w.tool_version = r.String(prov["tool_version"], "provenance.tool_version");
+    }
+  }
+  return w;
+}
+
+camera::BiasWeights ReadWeightsYaml(const std::string& path) {
+  return ParseWeightsYaml(ReadFile(path), path);
+}
+
+}  // namespace depthbias::io

@@ -1,0 +1,133 @@
+#include "model/bias_model.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace depthbias::model {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+Features At(double depth_m, double angle_deg) { return {depth_m, angle_deg * kDegToRad}; }
+
+bool Matches(const std::string& key, const std::string& value) {
+  return key == "*" || value == "*" || key == value;
+}
+
+}  // namespace
+
+ScenarioModel::ScenarioModel(const camera::BiasWeightsGroup& group,
+                             const FormConstants& constants, const std::string& model)
+    : group_(group) {
+  FormConstants c = constants;
+  c.knots_deg = group.knots_deg;
+  form_ = MakeForm(model, c);
+  const std::string label = group.light + "/" + group.preset;
+  const auto& params = form_->params();
+  if (group.names.size() != params.size() || group.values.size() != params.size()) {
+    throw std::invalid_argument("group " + label + ": " + std::to_string(group.values.size()) +
+                                " weights, model " + model + " has " +
+                                std::to_string(params.size()));
+  }
+  for (size_t j = 0; j < params.size(); ++j) {
+    if (group.names[j] != params[j].name) {
+      throw std::invalid_argument("group " + label + ": weight '" + group.names[j] +
+                                  "' where model " + model + " has '" + params[j].name + "'");
+    }
+    if (!std::isfinite(group.values[j])) {
+      throw std::invalid_argument("group " + label + ": weight '" + group.names[j] +
+                                  "' is not finite");
+    }
+  }
+  if (!group.covariance.empty()) {
+    const auto p = static_cast<Eigen::Index>(params.size());
+    if (static_cast<Eigen::Index>(group.covariance.size()) != p) {
+      throw std::invalid_argument("group " + label + ": covariance is not " +
+                                  std::to_string(p) + "x" + std::to_string(p));
+    }
+    covariance_.resize(p, p);
+    for (Eigen::Index i = 0; i < p; ++i) {
+      const auto& row = group.covariance[static_cast<size_t>(i)];
+      if (static_cast<Eigen::Index>(row.size()) != p) {
+        throw std::invalid_argument("group " + label + ": covariance is not " +
+                                    std::to_string(p) + "x" + std::to_string(p));
+      }
+      for (Eigen::Index j = 0; j < p; ++j) covariance_(i, j) = row[static_cast<size_t>(j)];
+    }
+  }
+}
+
+double ScenarioModel::BiasM(double depth_m, double angle_deg) const {
+  return form_->Bias(group_.values.data(), At(depth_m, angle_deg));
+}
+
+double ScenarioModel::CorrectedM(double depth_m, double angle_deg) const {
+  return depth_m - BiasM(depth_m, angle_deg);
+}
+
+double ScenarioModel::PredictiveStdM(double depth_m, double angle_deg) const {
+  const double s = std::isfinite(group_.residual_std_m) ? group_.residual_std_m : 0.0;
+  if (covariance_.size() == 0) return s;
+  const auto g = form_->BiasGradient(group_.values.data(), At(depth_m, angle_deg));
+  const Eigen::Map<const Eigen::VectorXd> gv(g.data(), static_cast<Eigen::Index>(g.size()));
+  return std::sqrt(std::max(0.0, gv.dot(covariance_ * gv)) + s * s);
+}
+
+double ScenarioModel::SafeDistanceM(double depth_m, double angle_deg, double k) const {
+  return CorrectedM(depth_m, angle_deg) - k * PredictiveStdM(depth_m, angle_deg);
+}
+
+bool ScenarioModel::CorrectPoint(Eigen::Vector3d* p) const {
+  const double z = p->z();
+  const double range = p->norm();
+  if (!(z > 0.0) || !std::isfinite(range)) return false;
+  const double angle_deg = std::atan2(std::hypot(p->x(), p->y()), z) / kDegToRad;
+  const double corrected = CorrectedM(z, angle_deg);
+  if (!std::isfinite(corrected) || !(corrected > 0.0)) return false;
+  *p *= corrected / range;
+  return true;
+}
+
+int ScenarioModel::CorrectCloud(std::vector<Eigen::Vector3d>* points) const {
+  int failed = 0;
+  for (auto& p : *points) failed += CorrectPoint(&p) ? 0 : 1;
+  return failed;
+}
+
+BiasModel::BiasModel(const camera::BiasWeights& weights) : weights_(weights) {
+  if (weights.groups.empty()) throw std::invalid_argument("the weights hold no group");
+  FormConstants c;
+  c.focal_px = weights.focal_px;
+  c.baseline_m = weights.baseline_m;
+  for (const auto& g : weights.groups) scenarios_.emplace_back(g, c, weights.model);
+}
+
+const ScenarioModel* BiasModel::Find(const std::string& light, const std::string& preset,
+                                     const std::string& emitter) const {
+  for (const auto& s : scenarios_) {
+    const auto& g = s.group();
+    if (Matches(g.light, light) && Matches(g.preset, preset) && Matches(g.emitter, emitter)) {
+      return &s;
+    }
+  }
+  return nullptr;
+}
+
+bool BiasModel::Has(const std::string& light, const std::string& preset,
+                    const std::string& emitter) const {
+  return Find(light, preset, emitter) != nullptr;
+}
+
+const ScenarioModel& BiasModel::Scenario(const std::string& light, const std::string& preset,
+                                         const std::string& emitter) const {
+  if (const ScenarioModel* s = Find(light, preset, emitter)) return *s;
+  std::string held;
+  for (const auto& s : scenarios_) {
+    held += (held.empty() ? "" : ", ") + s.group().light + "/" + s.group().preset;
+    if (s.group().emitter != "*") held += "/" + s.group().emitter;
+  }
+  throw std::out_of_range("no model for scenario light '" + light + "', preset '" + preset +
+                          "' (the weights hold: " + held + ")");
+}
+
+}  // namespace depthbias::model

@@ -1,0 +1,72 @@
+#pragma once
+// A fitted bias model as a machine uses it: per scenario (light, preset), the bias predicted
+// at any measured depth Z and off-axis angle α, the corrected distance, its predictive
+// standard deviation, a safety margin, and the point-wise correction of a cloud.
+// Built from the weights record (camera/bias_weights.h) that io reads from the weights YAML.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "camera/bias_weights.h"
+#include "model/forms.h"
+
+namespace depthbias::model {
+
+class ScenarioModel {
+ public:
+  // Throws std::invalid_argument when the group does not match the form (names, sizes,
+  // covariance shape).
+  ScenarioModel(const camera::BiasWeightsGroup& group, const FormConstants& constants,
+                const std::string& model);
+
+  // b(Z, α) = measured − nominal distance [m], as fitted.
+  double BiasM(double depth_m, double angle_deg) const;
+  // The nominal distance (range to the target) the measurement stands for: Z − b(Z, α).
+  double CorrectedM(double depth_m, double angle_deg) const;
+  // sqrt(gᵀ Σ g + σ²): parameter uncertainty at (Z, α) plus the residual scatter [m].
+  double PredictiveStdM(double depth_m, double angle_deg) const;
+  // Corrected distance minus k predictive standard deviations: a distance the target is not
+  // nearer than, with the confidence k stands for.
+  double SafeDistanceM(double depth_m, double angle_deg, double k) const;
+
+  // A camera-frame point moved along its own ray so that its range is the corrected distance
+  // for its own depth Z = p.z and off-axis angle α = atan(√(x² + y²) / z). Returns false
+  // (point unchanged) when z ≤ 0 or the prediction is not finite.
+  bool CorrectPoint(Eigen::Vector3d* point_m) const;
+  // Every point; returns how many could not be corrected (left unchanged).
+  int CorrectCloud(std::vector<Eigen::Vector3d>* points_m) const;
+
+  const camera::BiasWeightsGroup& group() const { return group_; }
+
+ private:
+  camera::BiasWeightsGroup group_;
+  std::shared_ptr<const Form> form_;
+  Eigen::MatrixXd covariance_;  // empty if unknown
+};
+
+class BiasModel {
+ public:
+  // Throws std::invalid_argument with a one-line reason (unknown model, parameter names that
+  // do not match it, a malformed covariance, no groups).
+  explicit BiasModel(const camera::BiasWeights& weights);
+
+  // The scenario for (light, preset[, emitter]); a group whose key is "*" matches any value.
+  // Throws std::out_of_range naming the scenario and the ones the weights hold.
+  const ScenarioModel& Scenario(const std::string& light, const std::string& preset,
+                                const std::string& emitter = "*") const;
+  bool Has(const std::string& light, const std::string& preset,
+           const std::string& emitter = "*") const;
+
+  const camera::BiasWeights& weights() const { return weights_; }
+
+ private:
+  const ScenarioModel* Find(const std::string& light, const std::string& preset,
+                            const std::string& emitter) const;
+  camera::BiasWeights weights_;
+  std::vector<ScenarioModel> scenarios_;
+};
+
+}  // namespace depthbias::model

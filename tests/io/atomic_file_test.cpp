@@ -1,0 +1,66 @@
+#include "io/atomic_file.h"
+
+#include <gtest/gtest.h>
+
+#include "io/sha256.h"
+#include "test_dir.h"
+
+namespace depthbias::io {
+namespace {
+
+using testing::CountFiles;
+using testing::FreshDir;
+
+TEST(AtomicFile, WritesAndReplacesWithoutLeavingTemporaries) {
+  const auto dir = FreshDir("io");
+  const std::string path = (dir / "out.txt").string();
+  WriteFileAtomic(path, "first");
+  EXPECT_EQ(ReadFile(path), "first");
+  WriteFileAtomic(path, std::string(100000, 'x'));
+  EXPECT_EQ(ReadFile(path).size(), 100000u);
+  EXPECT_EQ(CountFiles(dir), 1);
+}
+
+TEST(AtomicFile, MissingFolderFailsAndNamesThePath) {
+  const auto dir = FreshDir("io");
+  const std::string path = (dir / "no_such_folder" / "out.txt").string();
+  try {
+    WriteFileAtomic(path, "x");
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+TEST(AtomicFile, FolderAsOutputIsRefused) {
+  const auto dir = FreshDir("io");
+  EXPECT_THROW(WriteFileAtomic(dir.string(), "x"), IoError);
+  EXPECT_EQ(CountFiles(dir), 0);
+}
+
+TEST(AtomicFile, ReadMissingFileNamesIt) {
+  try {
+    ReadFile("/nonexistent/file.csv");
+    FAIL();
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/file.csv"), std::string::npos);
+  }
+}
+
+TEST(AtomicFile, BaseNameDropsFolders) {
+  EXPECT_EQ(BaseName("a/b/c.bag"), "c.bag");
+  EXPECT_EQ(BaseName("c.bag"), "c.bag");
+}
+
+// FIPS 180-4 test vectors.
+TEST(Sha256, KnownVectors) {
+  EXPECT_EQ(Sha256Hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(Sha256Hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(Sha256Hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(Sha256Hex(std::string(1000000, 'a')),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+}  // namespace
+}  // namespace depthbias::io

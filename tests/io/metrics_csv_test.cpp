@@ -1,0 +1,121 @@
+#include "io/metrics_csv.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "io/atomic_file.h"
+#include "test_dir.h"
+
+namespace depthbias::io {
+namespace {
+
+const char* kArticle = DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv";
+const char* kHeader12 =
+    "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+    "hole_rate_pct,valid_pct\n";
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    ParseMetricsCsv(text, "m.csv");
+  } catch (const IoError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MetricsCsv, ReadsTheArticlesTable) {
+  const auto rows = ReadMetricsCsv(kArticle);
+  ASSERT_EQ(rows.size(), 128u);
+  int daylight = 0;
+  for (const auto& r : rows) {
+    EXPECT_TRUE(r.ok());
+    EXPECT_TRUE(r.light == "daylight" || r.light == "sunset");
+    EXPECT_TRUE(r.preset == "HA" || r.preset == "HD");
+    EXPECT_NEAR(r.valid_pct + r.hole_rate_pct, 100.0, 0.02);
+    EXPECT_TRUE(std::isnan(r.range_m));  // extra columns are empty
+    daylight += r.light == "daylight";
+  }
+  EXPECT_EQ(daylight, 64);
+  EXPECT_EQ(rows[0].bag, "article_daylight_emitter-off_4m_0deg_HA");
+  EXPECT_DOUBLE_EQ(rows[0].median_m, 3.989);
+}
+
+TEST(MetricsCsv, WriteThenReadRoundTripsEveryColumn) {
+  camera::PanelMetrics m;
+  m.bag = "a, b.bag";
+  m.light = "daylight";
+  m.emitter = "on";
+  m.preset = "HA";
+  m.distance_m = 4;
+  m.angle_deg = 10;
+  m.frames = 300;
+  m.mean_m = 4.01;
+  m.median_m = 4.0;
+  m.plane_std_m = 0.01;
+  m.hole_rate_pct = 3;
+  m.valid_pct = 97;
+  m.range_m = 4.06;
+  m.azimuth_deg = 9.8;
+  m.elevation_deg = -1.0;
+  m.normal_tilt_deg = 2;
+  m.panel_width_m = 1;
+  m.panel_height_m = 1.01;
+  m.region_px = 1234;
+  m.subpixel_rms_px = 0.07;
+  m.temporal_std_m = 0.004;
+  camera::PanelMetrics failed;
+  failed.bag = "broken.bag";
+  failed.distance_m = 8;
+  failed.angle_deg = 0;
+  failed.status = "no_panel";
+  failed.message = "no plane found";
+  const auto dir = testing::FreshDir("io");
+  const std::string path = (dir / "m.csv").string();
+  WriteMetricsCsv(path, {m, failed});
+  const auto back = ReadMetricsCsv(path);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[0].bag, m.bag);
+  EXPECT_EQ(back[0].temporal_std_m, m.temporal_std_m);
+  EXPECT_EQ(back[0].region_px, m.region_px);
+  EXPECT_EQ(back[0].range_m, m.range_m);
+  EXPECT_FALSE(back[1].ok());
+  EXPECT_EQ(back[1].message, "no plane found");
+  EXPECT_TRUE(std::isnan(back[1].median_m));
+  // The header is DESIGN.md's order.
+  const std::string text = ReadFile(path);
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+            "hole_rate_pct,valid_pct,range_m,azimuth_deg,elevation_deg,normal_tilt_deg,"
+            "panel_width_m,panel_height_m,region_px,subpixel_rms_px,temporal_std_m,status,"
+            "message");
+}
+
+TEST(MetricsCsv, MissingColumnIsNamed) {
+  const std::string e = ErrorOf("bag,light,emitter,preset,distance_m\nx,d,on,HA,4\n");
+  EXPECT_NE(e.find("m.csv"), std::string::npos) << e;
+  EXPECT_NE(e.find("angle_deg"), std::string::npos) << e;
+}
+
+TEST(MetricsCsv, NaNInRequiredColumnNamesRowAndColumn) {
+  const std::string e = ErrorOf(std::string(kHeader12) + "x,d,on,HA,4,0,10,4,4,0.1,1,99\n" +
+                                "y,d,on,HA,8,0,10,8,,0.1,1,99\n");
+  EXPECT_NE(e.find("m.csv:3"), std::string::npos) << e;
+  EXPECT_NE(e.find("median_m"), std::string::npos) << e;
+  const std::string e2 = ErrorOf(std::string(kHeader12) + "x,d,on,HA,nan,0,10,4,4,0.1,1,99\n");
+  EXPECT_NE(e2.find("distance_m"), std::string::npos) << e2;
+  const std::string e3 = ErrorOf(std::string(kHeader12) + "x,d,on,HA,4,zero,10,4,4,0.1,1,99\n");
+  EXPECT_NE(e3.find("'zero' is not a number"), std::string::npos) << e3;
+}
+
+TEST(MetricsCsv, FailedRowsMayLackMeasurements) {
+  const auto rows = ParseMetricsCsv(
+      "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+      "hole_rate_pct,valid_pct,status,message\nx,d,on,HA,4,0,,,,,,,no_panel,none found\n",
+      "m.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].status, "no_panel");
+}
+
+}  // namespace
+}  // namespace depthbias::io
