@@ -42,7 +42,7 @@ class ScenarioResiduals {
     MetricsParams mp = cp_.metrics;
     mp.frames = cp_.frames;
     std::vector<camera::PanelMetrics> out;
-    for (const Cell& c : cells_) out.push_back(SimulateMetrics(p, c, mp).metrics);
+    for (auto& r : SimulateCellsMetrics(p, cells_, mp)) out.push_back(r.metrics);
     return out;
   }
 

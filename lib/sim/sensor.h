@@ -36,7 +36,7 @@ struct SensorParams {
   // Depth edges: neighbours whose depths differ by more than edge_jump_rel (relative) are an
   // edge; pixels within edge_band_px of one have at least edge_invalid_prob of being holes.
   double edge_jump_rel = 0.05;
-  int edge_band_px = 2;
+  int edge_band_px = 1;
   double edge_invalid_prob = 0.5;
   ScenarioParams fallback;               // for a scenario the table does not list
   std::vector<ScenarioParams> scenarios;

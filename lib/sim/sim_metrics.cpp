@@ -2,9 +2,14 @@
 // evaluated on the panel's image footprint alone.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include "sim/stereo_sim.h"
@@ -72,8 +77,8 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   m.angle_deg = cell.angle_deg;
 
   // The window holds every pixel whose static maps the region's pixels depend on.
-  const int pad = std::max({mp.region_margin_px, s.edge_band_px,
-                            static_cast<int>(params.departures.edge_mix_width_px)}) + 3;
+  const int pad =
+      std::max(s.edge_band_px, static_cast<int>(params.departures.edge_mix_width_px)) + 3;
   const Window window = PanelWindow(params, cell, pad);
   if (window.width == 0) {
     m.status = "no_panel";
@@ -82,7 +87,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   }
   const StereoSim sim(params, cell, window);
   result.truth = sim.truth();
-  const PixelList region = sim.PanelPixels(mp.region_margin_px);
+  const PixelList region = sim.RegionPixels(mp.region_margin_px);
   result.region_px = static_cast<int>(region.size());
   m.region_px = static_cast<double>(region.size());
   if (region.empty()) {
@@ -110,7 +115,8 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   }
   std::vector<int> n_t(np, 0);
   std::vector<double> se(np, 0.0), se2(np, 0.0), sa(np, 0.0), sa2(np, 0.0);
-  std::vector<std::uint32_t> histogram(65536, 0);
+  std::vector<std::uint16_t> pooled;  // every valid sample's depth counts, for the median
+  pooled.reserve(np * static_cast<size_t>(frames) / 2);
   std::vector<std::uint16_t> counts;
   int frames_with_depth = 0;
   size_t n = 0;
@@ -122,7 +128,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
       const std::uint16_t c = counts[i];
       if (!c) continue;
       any = true;
-      ++histogram[c];
+      pooled.push_back(c);
       const double z = c * s.depth_units_m;
       const double e = z - z_true[i];
       const double a = fb / z - d_true[i];
@@ -148,18 +154,12 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   m.mean_m = sum_z / n;
   {
     // Median of the pooled depths (the mean of the two middle ones for an even count).
-    size_t seen = 0;
-    const size_t lo_rank = (n - 1) / 2, hi_rank = n / 2;
-    double lo = 0, hi = 0;
-    for (int c = 1; c < 65536; ++c) {
-      if (!histogram[c]) continue;
-      if (seen <= lo_rank && lo_rank < seen + histogram[c]) lo = c * s.depth_units_m;
-      if (seen <= hi_rank && hi_rank < seen + histogram[c]) {
-        hi = c * s.depth_units_m;
-        break;
-      }
-      seen += histogram[c];
-    }
+    const size_t hi_rank = n / 2;
+    std::nth_element(pooled.begin(), pooled.begin() + hi_rank, pooled.end());
+    const double hi = pooled[hi_rank] * s.depth_units_m;
+    const double lo = n % 2 ? hi
+                            : *std::max_element(pooled.begin(), pooled.begin() + hi_rank) *
+                                  s.depth_units_m;
     m.median_m = 0.5 * (lo + hi);
   }
 
@@ -185,7 +185,6 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   Eigen::Vector3d normal = eig.eigenvectors().col(0);
   if (normal.z() > 0) normal = -normal;
   m.plane_std_m = std::sqrt(std::max(eig.eigenvalues()(0), 0.0));
-  m.normal_tilt_deg = std::acos(std::min(1.0, std::fabs(normal.z()))) * kRadToDeg;
 
   // Direction and range of the panel's centre: the centroid's ray at the median depth.
   const Eigen::Vector3d centroid = mean_p + origin;
@@ -194,10 +193,20 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   m.azimuth_deg = std::atan(cx) * kRadToDeg;
   m.elevation_deg = std::atan2(-cy, std::sqrt(1 + cx * cx)) * kRadToDeg;
 
-  // Plane residuals in disparity units (the Depth Quality Tool's subpixel RMS):
-  // r = a − c with c = f·B/Z_plane − f·B/Z_true per pixel; and the extent of the pixels' mean
-  // points in the plane.
-  const double plane_c = normal.dot(centroid);
+  // The plane in disparity, D = f·B/Z = α·x/z + β·y/z + γ, by ordinary least squares (noise is
+  // in disparity, along the rays; no tilt bias when the depth noise outgrows the panel): its
+  // normal (α, β, γ) gives the tilt, its residuals the Depth Quality Tool's subpixel RMS. With
+  // g = (x/z, y/z, 1) per pixel and a = D − D_true: residual = a − c, c = g·θ − D_true.
+  Eigen::Matrix3d gram = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < np; ++i) {
+    if (!n_t[i]) continue;
+    const Eigen::Vector3d g(xn[i], yn[i], 1.0);
+    gram += n_t[i] * g * g.transpose();
+    rhs += g * (sa[i] + n_t[i] * d_true[i]);
+  }
+  const Eigen::Vector3d theta = gram.ldlt().solve(rhs);
+  m.normal_tilt_deg = std::acos(std::min(1.0, std::fabs(theta.z()) / theta.norm())) * kRadToDeg;
   Eigen::Vector3d along_w = normal.cross(Eigen::Vector3d::UnitY());
   if (along_w.norm() < 1e-9) along_w = Eigen::Vector3d::UnitX();
   along_w.normalize();
@@ -206,7 +215,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   for (size_t i = 0; i < np; ++i) {
     if (!n_t[i]) continue;
     const Eigen::Vector3d ray(xn[i], yn[i], 1.0);
-    const double c = fb * normal.dot(ray) / plane_c - d_true[i];
+    const double c = ray.dot(theta) - d_true[i];
     sum_sq_d += sa2[i] - 2 * c * sa[i] + n_t[i] * c * c;
     const Eigen::Vector3d p = (z_true[i] + se[i] / n_t[i]) * ray - centroid;
     w_lo = std::min(w_lo, p.dot(along_w));
@@ -230,12 +239,35 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   return result;
 }
 
+std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
+                                                    const std::vector<Cell>& cells,
+                                                    const MetricsParams& metrics) {
+  std::vector<CellMetricsResult> out(cells.size());
+  const int threads = std::max(1, std::min<int>(metrics.threads, static_cast<int>(cells.size())));
+  std::atomic<size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    try {
+      for (size_t i = next++; i < cells.size(); i = next++)
+        out[i] = SimulateMetrics(params, cells[i], metrics);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = cells.size();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  return out;
+}
+
 std::vector<CellMetricsResult> SimulateProtocolMetrics(const SimParams& params,
                                                        const MetricsParams& metrics) {
-  std::vector<CellMetricsResult> out;
-  for (const Cell& cell : MakeCells(params.protocol))
-    out.push_back(SimulateMetrics(params, cell, metrics));
-  return out;
+  return SimulateCellsMetrics(params, MakeCells(params.protocol), metrics);
 }
 
 }  // namespace depthbias::sim

@@ -104,12 +104,16 @@ bool SimParams::IsValid(std::string* why) const {
 }
 
 bool MetricsParams::IsValid(std::string* why) const {
-  if (region_margin_px < 0 || region_margin_px > 100) {
+  if (!(region_margin_px >= 0 && region_margin_px <= 100)) {
     if (why) *why = "region_margin_px must be in [0, 100]";
     return false;
   }
   if (frames < 0) {
     if (why) *why = "frames must be >= 0";
+    return false;
+  }
+  if (threads < 1 || threads > 256) {
+    if (why) *why = "threads must be in [1, 256]";
     return false;
   }
   return true;
@@ -200,7 +204,10 @@ void StereoSim::Build() {
       if (u + 1 < w && jump(i, i + 1)) edge[i] = edge[i + 1] = 1;
       if (v + 1 < h && jump(i, i + w)) edge[i] = edge[i + w] = 1;
     }
-  const std::vector<unsigned char> near_edge = Dilate(edge, w, h, s.edge_band_px);
+  // The pixels on both sides of an edge are 1 px from it; a band of b px reaches b − 1 further.
+  const std::vector<unsigned char> near_edge =
+      s.edge_band_px > 0 ? Dilate(edge, w, h, s.edge_band_px - 1)
+                         : std::vector<unsigned char>(n, 0);
 
   // Edge mixing: the other side of the nearest edge within the mixing width.
   mix_delta_px_.assign(n, 0.f);
@@ -309,6 +316,47 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
   counts->resize(n);
   for (size_t i = 0; i < n; ++i)
     (*counts)[i] = Draw(frame_base + pixels.image[i], pixels.window[i], offset, sigma_px_);
+}
+
+PixelList StereoSim::RegionPixels(double margin_px) const {
+  const auto& in = params_.sensor.intrinsics;
+  const PanelPose& panel = truth_.panel;
+  // Panel coordinates (along width, along height) where the ray (xn, yn, 1) meets its plane.
+  auto on_plane = [&](double xn, double yn, Eigen::Vector2d* st) {
+    const Eigen::Vector3d ray(xn, yn, 1.0);
+    const double denom = panel.normal.dot(ray);
+    if (std::fabs(denom) < 1e-12) return false;
+    const double t = panel.normal.dot(panel.center_m) / denom;
+    if (!(t > 0)) return false;
+    const Eigen::Vector3d q = t * ray - panel.center_m;
+    *st = Eigen::Vector2d(q.dot(panel.axis_width), q.dot(panel.axis_height));
+    return true;
+  };
+  // One pixel's footprint on the panel at its centre: |∂(s,t)/∂u| + |∂(s,t)/∂v|.
+  const double cu = in.ppx + in.fx * panel.center_m.x() / panel.center_m.z();
+  const double cv = in.ppy + in.fy * panel.center_m.y() / panel.center_m.z();
+  auto at = [&](double du, double dv) {
+    Eigen::Vector2d st(0, 0);
+    on_plane((cu + du - in.ppx) / in.fx, (cv + dv - in.ppy) / in.fy, &st);
+    return st;
+  };
+  const Eigen::Vector2d du = at(0.5, 0) - at(-0.5, 0), dv = at(0, 0.5) - at(0, -0.5);
+  const double half_w = 0.5 * panel.width_m - margin_px * (std::fabs(du.x()) + std::fabs(dv.x()));
+  const double half_h = 0.5 * panel.height_m - margin_px * (std::fabs(du.y()) + std::fabs(dv.y()));
+  PixelList pixels;
+  if (half_w <= 0 || half_h <= 0) return pixels;
+  for (int v = 0; v < window_.height; ++v) {
+    const double yn = (window_.v0 + v - in.ppy) / in.fy;
+    for (int u = 0; u < window_.width; ++u) {
+      Eigen::Vector2d st;
+      if (!on_plane((window_.u0 + u - in.ppx) / in.fx, yn, &st)) continue;
+      if (std::fabs(st.x()) > half_w || std::fabs(st.y()) > half_h) continue;
+      const int i = v * window_.width + u;
+      pixels.window.push_back(i);
+      pixels.image.push_back(Counter(0, i));
+    }
+  }
+  return pixels;
 }
 
 PixelList StereoSim::PanelPixels(int margin_px) const {

@@ -73,6 +73,9 @@ class StereoSim {
 
   // Window pixels that see the panel, and that still do after eroding it by margin_px.
   PixelList PanelPixels(int margin_px) const;
+  // The panel's image region as panel_extract draws it: pixels whose centre ray meets the panel
+  // rectangle shrunk on every side by margin_px pixel footprints (at the panel's centre).
+  PixelList RegionPixels(double margin_px) const;
   // True depth Z of a window pixel (0 where nothing is hit).
   double TrueDepth(int pixel) const { return true_depth_m_[pixel]; }
 
@@ -100,8 +103,9 @@ class StereoSim {
 
 // Options of the metrics-only path.
 struct MetricsParams {
-  int region_margin_px = 3;  // the panel's footprint eroded by this, as panel_extract does
+  double region_margin_px = 0.5;  // panel rectangle shrunk by this many pixel footprints a side
   int frames = 0;            // 0: the protocol's
+  int threads = 1;           // recordings evaluated in parallel (results do not depend on it)
 
   bool IsValid(std::string* why) const;
 };
@@ -115,6 +119,11 @@ struct CellMetricsResult {
 };
 CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
                                   const MetricsParams& metrics = {});
+
+// The given recordings, in their order.
+std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
+                                                    const std::vector<Cell>& cells,
+                                                    const MetricsParams& metrics = {});
 
 // Every recording of the protocol, in MakeCells' order.
 std::vector<CellMetricsResult> SimulateProtocolMetrics(const SimParams& params,

@@ -1,0 +1,196 @@
+// simulate: the simulated D455 on a protocol (lib/sim). Three uses:
+//   simulate --protocol P --out-dir DIR [--frames N] [--seed S] [--effects F] [--sensor F]
+//       one RealSense-layout bag per recording + DIR/manifest.csv (with the true panel depth,
+//       range, angle and hole rate)
+//   simulate --protocol P --metrics-only --out metrics.csv [...]   the fast metrics-only path
+//   simulate --protocol P --calibrate-to real.csv --out sensor.yaml [...]   fit σ_d and holes
+// --sensor F (or "builtin") overrides the protocol's sensor file; --margin-px M the region margin;
+// --threads N recordings evaluated in parallel by the metrics-only path (default: all cores).
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <thread>
+
+#include "io/atomic_file.h"
+#include "io/bag.h"
+#include "io/manifest.h"
+#include "io/metrics_csv.h"
+#include "sim/calibrate.h"
+#include "sim/config_yaml.h"
+
+namespace {
+
+using namespace depthbias;
+namespace fs = std::filesystem;
+
+struct Fail : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+long long Whole(const std::string& flag, const std::string& text, long long min_value) {
+  size_t used = 0;
+  long long v = 0;
+  try {
+    v = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v < min_value)
+    throw Fail(flag + " '" + text + "' is not a whole number >= " + std::to_string(min_value));
+  return v;
+}
+
+std::string Fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+void WriteRecordings(const sim::SimParams& params, const std::string& dir) {
+  fs::create_directories(dir);
+  std::vector<io::ManifestRow> rows;
+  for (const sim::Cell& cell : sim::MakeCells(params.protocol)) {
+    const sim::StereoSim simulator(params, cell);
+    io::BagWriterConfig config;
+    config.intrinsics = params.sensor.intrinsics;
+    config.depth_units_m = params.sensor.depth_units_m;
+    config.fps = params.protocol.fps;
+    sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
+    config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
+    config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
+    config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
+    const std::string bag = cell.name + ".bag";
+    io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
+    camera::DepthFrame frame;
+    for (int k = 0; k < params.protocol.frames; ++k) {
+      simulator.Render(k, &frame);
+      writer.Write(frame);
+    }
+    writer.Close();
+    const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell);
+    io::ManifestRow row;
+    row.bag = bag;
+    row.distance_m = cell.distance_m;
+    row.angle_deg = cell.angle_deg;
+    row.light = cell.light;
+    row.preset = cell.preset;
+    row.emitter = cell.emitter_on ? "on" : "off";
+    row.extras = {{"true_depth_m", Fixed(truth.truth.panel_depth_m, 6)},
+                  {"true_range_m", Fixed(truth.truth.panel_range_m, 6)},
+                  {"true_angle_deg", Fixed(truth.truth.panel_angle_deg, 4)},
+                  {"true_hole_rate_pct", Fixed(truth.metrics.hole_rate_pct, 3)}};
+    rows.push_back(row);
+  }
+  io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
+                    {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
+  std::printf("simulate: %zu recordings of %d frames in %s\n", rows.size(),
+              params.protocol.frames, dir.c_str());
+}
+
+void Calibrate(const sim::SimParams& params, const std::string& real_csv,
+               const std::string& out, int margin_px, int threads) {
+  sim::CalibrateParams cp;
+  cp.metrics.region_margin_px = margin_px;
+  cp.metrics.threads = threads;
+  const sim::CalibrationResult r =
+      sim::CalibrateSensor(params, io::ReadMetricsCsv(real_csv), cp);
+  if (!r.success) throw Fail(real_csv + ": calibration failed: " + r.message);
+  std::printf("%-9s %-6s %-4s %5s %5s %10s %10s %9s %9s\n", "light", "preset", "emit", "D_m",
+              "A_deg", "real_std_m", "sim_std_m", "real_val%", "sim_val%");
+  for (const auto& f : r.scenarios) {
+    for (const auto& c : f.cells)
+      std::printf("%-9s %-6s %-4s %5.0f %5.0f %10.3f %10.3f %9.2f %9.2f\n",
+                  f.fitted.light.c_str(), f.fitted.preset.c_str(), c.emitter.c_str(),
+                  c.distance_m, c.angle_deg, c.real_plane_std_m, c.sim_plane_std_m,
+                  c.real_valid_pct, c.sim_valid_pct);
+  }
+  std::printf("\n%-9s %-6s %3s %10s %12s %9s %9s %9s %9s %8s %8s\n", "light", "preset", "n",
+              "sigma_d_px", "invalid_prob", "real_std", "sim_std", "real_val", "sim_val",
+              "rmslog", "rmsval");
+  for (const auto& f : r.scenarios) {
+    std::printf("%-9s %-6s %3d %10.4f %12.4f %9.3f %9.3f %9.2f %9.2f %8.3f %8.2f\n",
+                f.fitted.light.c_str(), f.fitted.preset.c_str(), f.recordings,
+                f.fitted.sigma_d_px, f.fitted.invalid_prob, f.mean_real_plane_std_m,
+                f.mean_sim_plane_std_m, f.mean_real_valid_pct, f.mean_sim_valid_pct,
+                f.rms_log_plane_std, f.rms_valid_pct);
+    std::printf("  %s\n", f.report.c_str());
+  }
+  if (!r.message.empty()) std::printf("note: %s\n", r.message.c_str());
+  io::WriteFileAtomic(
+      out, sim::FormatSensorYaml(
+               r.sensor,
+               {"D455 base sensor calibrated by simulate --calibrate-to " +
+                    io::BaseName(real_csv) + " (per scenario: sigma_d_px, invalid_prob)",
+                "fitted to plane_std_m (relative) and valid_pct over every recording"},
+               sim::CalibrationYaml(r, io::BaseName(real_csv))));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string protocol_file, sensor_file, effects_file, out_dir, out, calibrate_to;
+  bool metrics_only = false;
+  int frames = 0, margin_px = sim::MetricsParams{}.region_margin_px;
+  int threads = std::max(1u, std::thread::hardware_concurrency());
+  sim::SimParams params;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw Fail(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--protocol") protocol_file = value();
+      else if (a == "--sensor") sensor_file = value();
+      else if (a == "--effects") effects_file = value();
+      else if (a == "--out-dir") out_dir = value();
+      else if (a == "--out") out = value();
+      else if (a == "--calibrate-to") calibrate_to = value();
+      else if (a == "--metrics-only") metrics_only = true;
+      else if (a == "--frames") frames = static_cast<int>(Whole(a, value(), 1));
+      else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Whole(a, value(), 0));
+      else if (a == "--margin-px") margin_px = static_cast<int>(Whole(a, value(), 0));
+      else if (a == "--threads") threads = static_cast<int>(Whole(a, value(), 1));
+      else throw Fail("unknown argument '" + a + "' (see the header of apps/simulate.cpp)");
+    }
+    if (protocol_file.empty()) throw Fail("--protocol FILE is required");
+    if ((out_dir.empty() ? 0 : 1) + metrics_only + !calibrate_to.empty() != 1)
+      throw Fail("choose one of --out-dir DIR, --metrics-only, --calibrate-to real.csv");
+    if ((metrics_only || !calibrate_to.empty()) && out.empty()) throw Fail("--out is required");
+    std::string why, named_sensor;
+    if (!sim::ParseProtocolYaml(io::ReadFile(protocol_file), &params.protocol, &named_sensor,
+                                &why))
+      throw Fail(protocol_file + ": " + why);
+    if (sensor_file.empty() && !named_sensor.empty())
+      sensor_file = (fs::path(protocol_file).parent_path() / named_sensor).string();
+    if (!sensor_file.empty() && sensor_file != "builtin" &&
+        !sim::ParseSensorYaml(io::ReadFile(sensor_file), &params.sensor, &why))
+      throw Fail(sensor_file + ": " + why);
+    if (!effects_file.empty()) {
+      std::vector<sim::EffectSpec> effects;
+      if (!sim::ParseEffectsYaml(io::ReadFile(effects_file), &effects, &why) ||
+          !sim::BuildDepartures(effects, &params.departures, &why))
+        throw Fail(effects_file + ": " + why);
+    }
+    if (frames != 0) params.protocol.frames = frames;
+    if (!params.IsValid(&why)) throw Fail(why);
+
+    if (!out_dir.empty()) {
+      WriteRecordings(params, out_dir);
+    } else if (metrics_only) {
+      sim::MetricsParams mp;
+      mp.region_margin_px = margin_px;
+      mp.threads = threads;
+      std::vector<camera::PanelMetrics> rows;
+      for (const auto& r : sim::SimulateProtocolMetrics(params, mp)) rows.push_back(r.metrics);
+      io::WriteMetricsCsv(out, rows);
+    } else {
+      Calibrate(params, calibrate_to, out, margin_px, threads);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "simulate: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
