@@ -1,0 +1,212 @@
+// panel_extract: finds the panel in RealSense recordings and writes one row of panel metrics per
+// recording (DESIGN.md's CSV), and optionally panels.json with what each detection found.
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "io/atomic_file.h"
+#include "io/bag.h"
+#include "io/config_file.h"
+#include "io/manifest.h"
+#include "io/metrics_csv.h"
+#include "panel/extract.h"
+
+namespace fs = std::filesystem;
+using namespace depthbias;
+
+namespace {
+
+const char* kUsage =
+    "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
+    "[--panels-out panels.json] [--jobs N] [--region-mode auto|box --boxes JSON] [--quiet] "
+    "BAG_OR_DIR...";
+
+class BagSource : public panel::FrameSource {
+ public:
+  explicit BagSource(std::string path) : path_(std::move(path)) { Rewind(); }
+  const io::BagInfo& info() const { return reader_->info(); }
+  bool Next(camera::DepthFrame* f) override { return reader_->Next(f); }
+  bool Rewind() override {
+    reader_ = std::make_unique<io::BagReader>(path_);
+    return true;
+  }
+
+ private:
+  std::string path_;
+  std::unique_ptr<io::BagReader> reader_;
+};
+
+std::string OptionName(const std::map<std::string, double>& opt, const std::string& key,
+                       const std::map<int, std::string>& names) {
+  const auto it = opt.find(key);
+  if (it == opt.end()) return "";
+  const auto n = names.find(static_cast<int>(std::lround(it->second)));
+  return n != names.end() ? n->second : std::to_string(it->second);
+}
+
+struct Options {
+  std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
+  int jobs = 1;
+  bool quiet = false;
+  std::vector<std::string> inputs;
+};
+
+struct Job {
+  std::string path;
+  camera::PanelMetrics row;
+  std::string json;
+};
+
+void Run(Job* job, const Options& o, const panel::PanelParams& params,
+         const io::Manifest* manifest, const std::map<std::string, std::array<double, 4>>& boxes) {
+  camera::PanelMetrics& m = job->row;
+  const std::string name = io::BaseName(job->path);
+  m.bag = name;
+  panel::ExtractResult r;
+  camera::Intrinsics in;
+  try {
+    const io::ManifestRow* truth = manifest ? manifest->Find(job->path) : nullptr;
+    if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
+    if (truth) {
+      m.distance_m = truth->distance_m;
+      m.angle_deg = truth->angle_deg;
+      m.light = truth->light;
+    }
+    std::optional<panel::PixelBox> box;
+    if (o.mode == "box") {
+      const auto b = boxes.find(name);
+      if (b == boxes.end()) throw std::runtime_error("no box for it in " + o.boxes);
+      box = panel::PixelBox{b->second[0], b->second[1], b->second[2], b->second[3]};
+    }
+    BagSource source(job->path);
+    const io::BagInfo& info = source.info();
+    if (!info.has_depth_intrinsics) throw std::runtime_error("no depth intrinsics recorded");
+    in = info.depth_intrinsics;
+    panel::SearchWindow window;
+    if (truth) window = {truth->distance_m, truth->angle_deg};
+    r = panel::ExtractPanel(source, in, params, window, box);
+    const camera::PanelMetrics known = m;
+    m = r.metrics;
+    m.bag = known.bag;
+    m.preset = OptionName(info.options, "Visual_Preset",
+                          {{0, "Custom"}, {1, "Default"}, {2, "Hand"}, {3, "HA"}, {4, "HD"},
+                           {5, "MD"}});
+    m.emitter = OptionName(info.options, "Emitter_Enabled", {{0, "off"}, {1, "on"}});
+    if (truth) {
+      m.distance_m = known.distance_m;
+      m.angle_deg = known.angle_deg;
+      m.light = known.light;
+      if (truth->preset) m.preset = *truth->preset;
+      if (truth->emitter) m.emitter = *truth->emitter;
+    }
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    m.status = "error";
+    m.message = what.rfind(job->path, 0) == 0 ? what : job->path + ": " + what;
+  }
+  r.metrics = m;
+  job->json = panel::DetectionJson(r, in, "\"bag\": \"" + name + "\"");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  panel::PanelParams params;
+  std::unique_ptr<io::Manifest> manifest;
+  std::map<std::string, std::array<double, 4>> boxes;
+  std::vector<Job> jobs;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--manifest") o.manifest = value();
+      else if (a == "--config") o.config = value();
+      else if (a == "--out") o.out = value();
+      else if (a == "--panels-out") o.panels_out = value();
+      else if (a == "--boxes") o.boxes = value();
+      else if (a == "--region-mode") o.mode = value();
+      else if (a == "--jobs") o.jobs = std::max(1, std::atoi(value().c_str()));
+      else if (a == "--quiet") o.quiet = true;
+      else if (a == "--help" || a == "-h") return std::cout << kUsage << "\n", 0;
+      else if (a.rfind("--", 0) == 0) throw std::runtime_error("unknown option " + a);
+      else o.inputs.push_back(a);
+    }
+    if (o.inputs.empty()) throw std::runtime_error("no recording given");
+    if (o.mode != "auto" && o.mode != "box") throw std::runtime_error("--region-mode auto|box");
+    if (o.mode == "box" && o.boxes.empty()) throw std::runtime_error("box mode needs --boxes");
+    if (!o.config.empty()) {
+      for (const io::ConfigEntry& e : io::ReadConfigScalars(o.config)) {
+        std::string why;
+        if (!params.Set(e.key, e.value, &why))
+          throw std::runtime_error(o.config + ":" + std::to_string(e.line) + ": " + why);
+      }
+    }
+    std::string why;
+    if (!params.IsValid(&why)) throw std::runtime_error(o.config + ": " + why);
+    if (!o.manifest.empty()) manifest = std::make_unique<io::Manifest>(io::ReadManifest(o.manifest));
+    if (!o.boxes.empty()) boxes = io::ReadBoxes(o.boxes);
+    for (const std::string& in : o.inputs) {
+      if (!fs::is_directory(in)) {
+        jobs.push_back({in, {}, {}});
+        continue;
+      }
+      std::vector<std::string> found;
+      for (const auto& e : fs::recursive_directory_iterator(in))
+        if (e.is_regular_file() && e.path().extension() == ".bag") found.push_back(e.path());
+      if (found.empty()) throw std::runtime_error(in + ": no .bag file in this folder");
+      std::sort(found.begin(), found.end());
+      for (const std::string& f : found) jobs.push_back({f, {}, {}});
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n" << kUsage << "\n";
+    return 2;
+  }
+
+  const bool progress = !o.quiet && isatty(STDERR_FILENO);
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex print;
+  auto worker = [&] {
+    for (std::size_t k; (k = next++) < jobs.size();) {
+      Run(&jobs[k], o, params, manifest.get(), boxes);
+      std::lock_guard<std::mutex> lock(print);
+      ++done;
+      if (!jobs[k].row.ok())
+        std::cerr << (progress ? "\r\033[K" : "") << jobs[k].row.bag << ": "
+                  << jobs[k].row.status << ": " << jobs[k].row.message << "\n";
+      if (progress)
+        std::cerr << "\r\033[K[" << done << "/" << jobs.size() << "] " << jobs[k].row.bag
+                  << std::flush;
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 0; t < std::min<int>(o.jobs, static_cast<int>(jobs.size())); ++t)
+    threads.emplace_back(worker);
+  for (std::thread& t : threads) t.join();
+  if (progress) std::cerr << "\r\033[K";
+
+  std::vector<camera::PanelMetrics> rows;
+  std::string json = "[\n";
+  bool all_ok = true;
+  for (const Job& j : jobs) {
+    rows.push_back(j.row);
+    json += (rows.size() > 1 ? ",\n" : "") + j.json;
+    all_ok = all_ok && j.row.ok();
+  }
+  try {
+    io::WriteMetricsCsv(o.out, rows);
+    if (!o.panels_out.empty()) io::WriteFileAtomic(o.panels_out, json + "\n]\n");
+  } catch (const std::exception& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n";
+    return 2;
+  }
+  return all_ok ? 0 : 1;
+}

@@ -1,0 +1,77 @@
+#pragma once
+// Panel detection on a static scene: frames are pooled into a per-pixel mean depth image
+// (DepthAccumulator), deprojected into a cloud, the ground removed by RANSAC, the rest clustered,
+// planes found in each cluster by RANSAC and scored as the panel (size, shape, planarity, facing
+// the camera, optional search window), and the winner refined on all its inlier pixels.
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "camera/depth_frame.h"
+#include "panel/geometry.h"
+#include "panel/params.h"
+
+namespace depthbias::panel {
+
+// Per-pixel count of valid samples and sum of depth counts over the frames added.
+class DepthAccumulator {
+ public:
+  DepthAccumulator(int width, int height);
+  void Add(const camera::DepthFrame& frame);
+  int width() const { return width_; }
+  int height() const { return height_; }
+  std::uint64_t frames() const { return frames_; }
+  std::uint32_t Count(std::size_t i) const { return n_[i]; }
+  // Mean depth of pixel i over its valid samples [m]; 0 without samples.
+  double MeanDepth(std::size_t i) const {
+    return n_[i] ? static_cast<double>(sum_[i]) / n_[i] * depth_units_m_ : 0.0;
+  }
+
+ private:
+  int width_, height_;
+  double depth_units_m_ = 0.001;
+  std::uint64_t frames_ = 0;
+  std::vector<std::uint32_t> n_;
+  std::vector<std::uint64_t> sum_;
+};
+
+// Nominal position of the panel from the manifest; NaN when unknown.
+struct SearchWindow {
+  double distance_m = std::nan("");
+  double angle_deg = std::nan("");
+  bool known() const { return std::isfinite(distance_m) || std::isfinite(angle_deg); }
+};
+
+// One plane found in a cluster and how it scored.
+struct PanelCandidate {
+  int cluster = -1;
+  int inliers = 0;       // cloud points (blocks)
+  double width_m = 0, height_m = 0, range_m = 0, off_axis_deg = 0, facing_deg = 0;
+  double cost = 0;       // lower is better
+  std::string rejected;  // empty when acceptable
+};
+
+struct PanelDetection {
+  bool found = false;
+  std::string why_not;
+  PanelRectangle panel;        // refined on all inlier pixels
+  double plane_rms_m = 0.0;    // RMS orthogonal residual of the refined inliers
+  int inlier_pixels = 0;       // full-resolution pixels supporting the refined plane
+  bool ground_found = false;
+  Plane ground;
+  int ground_inliers = 0;
+  int cloud_points = 0;        // detection cloud size (blocks with depth)
+  int block_px = 0;
+  int clusters = 0;
+  int ransac_iterations = 0;   // summed over every RANSAC run
+  std::uint64_t frames = 0;    // frames pooled
+  std::vector<PanelCandidate> candidates;
+  int chosen = -1;             // index into candidates
+};
+
+PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
+                           const PanelParams& params, const SearchWindow& window = {});
+
+}  // namespace depthbias::panel

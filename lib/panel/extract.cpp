@@ -1,0 +1,257 @@
+#include "panel/extract.h"
+
+#include <cmath>
+#include <deque>
+#include <iomanip>
+#include <sstream>
+
+namespace depthbias::panel {
+namespace {
+
+bool FrameMatches(const camera::DepthFrame& f, const camera::Intrinsics& in, std::string* why) {
+  if (f.width != in.width || f.height != in.height ||
+      f.counts.size() != static_cast<std::size_t>(in.width) * in.height) {
+    *why = "frame " + std::to_string(f.frame_number) + " is " + std::to_string(f.width) + "x" +
+           std::to_string(f.height) + ", the intrinsics say " + std::to_string(in.width) + "x" +
+           std::to_string(in.height);
+    return false;
+  }
+  if (!(f.depth_units_m > 0) || !std::isfinite(f.depth_units_m)) {
+    *why = "frame " + std::to_string(f.frame_number) + " has no valid depth units";
+    return false;
+  }
+  return true;
+}
+
+void Fail(ExtractResult* r, const std::string& status, const std::string& message) {
+  r->metrics.status = status;
+  r->metrics.message = message;
+}
+
+}  // namespace
+
+ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrinsics,
+                           const PanelParams& params, const SearchWindow& window,
+                           const std::optional<PixelBox>& box) {
+  ExtractResult res;
+  std::string why;
+  if (!params.IsValid(&why)) {
+    Fail(&res, "error", "bad parameters: " + why);
+    return res;
+  }
+  if (!intrinsics.IsValid(&why)) {
+    Fail(&res, "error", "bad intrinsics: " + why);
+    return res;
+  }
+  if (intrinsics.model == camera::Distortion::kModifiedBrownConrady) {
+    Fail(&res, "error", "depth stream has Modified Brown-Conrady distortion, which cannot be "
+                        "deprojected");
+    return res;
+  }
+  const RayTable rays(intrinsics);
+  camera::DepthFrame frame;
+
+  // Box mode: the region is given, one pass measures it.
+  if (box) {
+    res.passes = 1;
+    res.region = RegionFromBox(intrinsics.width, intrinsics.height, box->u0, box->v0, box->u1,
+                               box->v1);
+    if (res.region.pixels.empty()) {
+      Fail(&res, "error", "the box lies outside the image");
+      return res;
+    }
+    RegionMeasurer measurer(&rays, res.region, params.baseline_m);
+    while (source.Next(&frame)) {
+      ++res.frames_read;
+      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+      measurer.Add(frame);
+    }
+    // The box's centre ray gives a provisional direction; then the box's pixels on the fitted
+    // plane give the panel's centre and size.
+    camera::PanelMetrics& m = res.metrics;
+    const Eigen::Vector2d c(0.5 * (box->u0 + box->u1 - 1), 0.5 * (box->v0 + box->v1 - 1));
+    const Eigen::Vector2d cr = camera::PixelToNormalized(intrinsics, c);
+    res.measure = measurer.Finish({cr.x(), cr.y(), 1.0}, &m);
+    if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not), res;
+    PanelRectangle rect;
+    const Plane& pl = res.measure.disparity_plane_ok ? res.measure.disparity_plane
+                                                      : res.measure.plane.plane;
+    if (RectangleFromPixels(rays, pl, {0, -1, 0}, res.region.pixels, 1.0, &rect)) {
+      const Eigen::Vector3d& center = rect.center_m;
+      m.azimuth_deg = std::atan2(center.x(), center.z()) * 180.0 / M_PI;
+      m.elevation_deg =
+          std::atan2(-center.y(), std::hypot(center.x(), center.z())) * 180.0 / M_PI;
+      m.panel_width_m = rect.width_m;
+      m.panel_height_m = rect.height_m;
+    }
+    return res;
+  }
+
+  // Automatic mode, pass 1: pool frames for detection, keeping them for measurement when the
+  // detection uses only the first detection_frames of them.
+  const std::size_t frame_bytes = static_cast<std::size_t>(intrinsics.width) * intrinsics.height *
+                                  sizeof(std::uint16_t);
+  const bool cache = params.detection_frames > 0 &&
+                     params.detection_frames * static_cast<double>(frame_bytes) <=
+                         params.max_cache_mb * 1024.0 * 1024.0;
+  const std::uint64_t limit = cache ? static_cast<std::uint64_t>(params.detection_frames) : 0;
+  DepthAccumulator acc(intrinsics.width, intrinsics.height);
+  std::deque<camera::DepthFrame> cached;
+  bool more = true;
+  res.passes = 1;
+  while (limit == 0 || acc.frames() < limit) {
+    if (!source.Next(&frame)) {
+      more = false;
+      break;
+    }
+    ++res.frames_read;
+    if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+    acc.Add(frame);
+    if (cache) cached.push_back(frame);
+  }
+  if (acc.frames() == 0) {
+    Fail(&res, "error", "the recording holds no depth frame");
+    return res;
+  }
+  res.detection = DetectPanel(rays, acc, params, window);
+  if (!res.detection.found) {
+    Fail(&res, "no_panel", res.detection.why_not);
+    return res;
+  }
+  res.region = RegionFromRectangle(rays, res.detection.panel, params.region_margin_px);
+  if (res.region.pixels.empty()) {
+    Fail(&res, "no_panel", "the panel's image region is empty after the margin");
+    return res;
+  }
+
+  // Pass 2: measure the region over every frame.
+  RegionMeasurer measurer(&rays, res.region, params.baseline_m);
+  if (cache) {
+    for (const camera::DepthFrame& f : cached) measurer.Add(f);
+    cached.clear();
+    while (more && source.Next(&frame)) {
+      ++res.frames_read;
+      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+      measurer.Add(frame);
+    }
+  } else {
+    if (!source.Rewind()) {
+      Fail(&res, "error", "cannot read the recording a second time to measure the panel");
+      return res;
+    }
+    res.passes = 2;
+    while (source.Next(&frame)) {
+      ++res.frames_read;
+      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+      measurer.Add(frame);
+    }
+  }
+  camera::PanelMetrics& m = res.metrics;
+  res.measure = measurer.Finish(res.detection.panel.center_m, &m);
+  m.panel_width_m = res.detection.panel.width_m;
+  m.panel_height_m = res.detection.panel.height_m;
+  if (!res.measure.ok) Fail(&res, "no_panel", res.measure.why_not);
+  return res;
+}
+
+namespace {
+
+std::string Num(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(9) << v;
+  return s.str();
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
+}
+
+std::string Quote(const std::string& text) {
+  std::string out = "\"";
+  for (char ch : text) {
+    if (ch == '"' || ch == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (static_cast<unsigned char>(ch) < 0x20) {
+      out += ' ';
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string DetectionJson(const ExtractResult& r, const camera::Intrinsics& in,
+                          const std::string& extra_members) {
+  std::ostringstream j;
+  const PanelDetection& d = r.detection;
+  j << "{";
+  if (!extra_members.empty()) j << extra_members << ", ";
+  j << "\"status\": " << Quote(r.metrics.status) << ", \"message\": " << Quote(r.metrics.message);
+  j << ", \"intrinsics\": {\"width\": " << in.width << ", \"height\": " << in.height
+    << ", \"fx\": " << Num(in.fx) << ", \"fy\": " << Num(in.fy) << ", \"ppx\": " << Num(in.ppx)
+    << ", \"ppy\": " << Num(in.ppy) << ", \"model\": " << Quote(camera::DistortionName(in.model))
+    << ", \"coeffs\": [" << Num(in.coeffs[0]) << ", " << Num(in.coeffs[1]) << ", "
+    << Num(in.coeffs[2]) << ", " << Num(in.coeffs[3]) << ", " << Num(in.coeffs[4]) << "]}";
+  j << ", \"frames_read\": " << r.frames_read << ", \"passes\": " << r.passes
+    << ", \"frames_detection\": " << d.frames << ", \"frames_measured\": " << r.measure.frames
+    << ", \"frames_with_depth\": " << r.measure.frames_with_depth;
+  if (d.found) {
+    const PanelRectangle& p = d.panel;
+    j << ", \"plane\": {\"normal\": " << Vec(p.plane.normal)
+      << ", \"offset_m\": " << Num(p.plane.offset_m) << ", \"rms_m\": " << Num(d.plane_rms_m)
+      << "}, \"center_m\": " << Vec(p.center_m) << ", \"width_m\": " << Num(p.width_m)
+      << ", \"height_m\": " << Num(p.height_m) << ", \"corners_m\": [";
+    const auto corners = p.Corners();
+    for (int k = 0; k < 4; ++k) j << (k ? ", " : "") << Vec(corners[k]);
+    j << "]";
+  }
+  if (r.measure.plane.ok) {
+    j << ", \"measured_plane\": {\"normal\": " << Vec(r.measure.plane.plane.normal)
+      << ", \"offset_m\": " << Num(r.measure.plane.plane.offset_m)
+      << ", \"rms_m\": " << Num(r.measure.plane.rms_m) << "}";
+  }
+  j << ", \"outline_px\": [";
+  for (std::size_t k = 0; k < r.region.outline_px.size(); ++k)
+    j << (k ? ", " : "") << "[" << Num(r.region.outline_px[k].x()) << ", "
+      << Num(r.region.outline_px[k].y()) << "]";
+  j << "], \"region_px\": " << r.region.size() << ", \"region_runs\": [";
+  // The region as [v, u_begin, u_end) runs of pixels, row by row.
+  const std::vector<std::uint32_t>& px = r.region.pixels;
+  for (std::size_t k = 0; k < px.size();) {
+    std::size_t e = k + 1;
+    while (e < px.size() && px[e] == px[e - 1] + 1 && px[e] % r.region.width != 0) ++e;
+    const int width = r.region.width;
+    j << (k ? ", " : "") << "[" << px[k] / width << ", " << px[k] % width << ", "
+      << px[e - 1] % width + 1 << "]";
+    k = e;
+  }
+  j << "]";
+  if (!r.region.pixels.empty())
+    j << ", \"region_bbox\": [" << r.region.u_min << ", " << r.region.v_min << ", "
+      << r.region.u_max + 1 << ", " << r.region.v_max + 1 << "]";
+  j << ", \"inlier_pixels\": " << d.inlier_pixels << ", \"cloud_points\": " << d.cloud_points
+    << ", \"ground_found\": " << (d.ground_found ? "true" : "false")
+    << ", \"ground_inliers\": " << d.ground_inliers;
+  if (d.ground_found)
+    j << ", \"ground_plane\": {\"normal\": " << Vec(d.ground.normal)
+      << ", \"offset_m\": " << Num(d.ground.offset_m) << "}";
+  j << ", \"clusters\": " << d.clusters << ", \"ransac_iterations\": " << d.ransac_iterations
+    << ", \"candidates\": [";
+  for (std::size_t k = 0; k < d.candidates.size(); ++k) {
+    const PanelCandidate& c = d.candidates[k];
+    j << (k ? ", " : "") << "{\"cluster\": " << c.cluster << ", \"inliers\": " << c.inliers
+      << ", \"width_m\": " << Num(c.width_m) << ", \"height_m\": " << Num(c.height_m)
+      << ", \"range_m\": " << Num(c.range_m) << ", \"off_axis_deg\": " << Num(c.off_axis_deg)
+      << ", \"cost\": " << Num(c.cost) << ", \"chosen\": "
+      << (static_cast<int>(k) == d.chosen ? "true" : "false")
+      << ", \"rejected\": " << Quote(c.rejected) << "}";
+  }
+  j << "]}";
+  return j.str();
+}
+
+}  // namespace depthbias::panel

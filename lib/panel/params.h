@@ -1,0 +1,77 @@
+#pragma once
+// Parameters of panel extraction: detection (accumulation, RANSAC ground and panel planes,
+// clustering, scoring), the panel's image region and the metrics. Defaults are the D455 at
+// 1280×720 outdoors with the article's 1×1 m panel; YAML overrides only the keys it names.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace depthbias::panel {
+
+struct PanelParams {
+  // Target.
+  double panel_width_m = 1.0;   // nominal panel size
+  double panel_height_m = 1.0;
+  double size_tolerance = 0.4;  // accepted relative size error of a candidate (0.4 = ±40 %)
+
+  // Sensor (for noise-aware thresholds and disparity-unit metrics).
+  double baseline_m = 0.095;               // stereo baseline B (D455)
+  double expected_subpixel_rms_px = 0.08;  // disparity noise σ_d used for inlier thresholds
+
+  // Accumulation: frames of the static scene pooled for detection. The first
+  // detection_frames frames are kept in memory so one pass over the recording suffices;
+  // 0 pools every frame and reads the recording twice (pass 1 detect, pass 2 measure).
+  int detection_frames = 30;
+  double max_cache_mb = 256.0;  // memory allowed for those cached frames
+
+  // Detection cloud: the accumulated depth image binned into blocks of block_px × block_px;
+  // 0 picks width / 320 (4 at 1280×720).
+  int block_px = 0;
+  double max_depth_m = 40.0;  // farther points are ignored
+  double min_depth_m = 0.3;
+
+  // Ground: RANSAC plane roughly perpendicular to the camera's up axis (−y).
+  bool remove_ground = true;
+  double ground_distance_m = 0.08;   // inlier distance to the ground plane
+  double ground_max_angle_deg = 25;  // allowed angle between ground normal and camera −y
+  double min_ground_fraction = 0.05; // of the cloud, below this no ground is assumed
+
+  // Clustering of the non-ground points in (x/z, y/z, k·ln z) space: neighbours within
+  // cluster_angle_rad in direction and cluster_relative_depth in depth join.
+  double cluster_angle_rad = 0.02;
+  double cluster_relative_depth = 0.06;
+  int min_cluster_points = 12;
+  int max_clusters = 30;
+  int max_planes_per_cluster = 3;
+
+  // Panel plane RANSAC and refinement: inlier if the depth residual is within
+  // plane_sigma_k·σ_Z(Z) + plane_distance_m, σ_Z = Z²·σ_d/(f·B).
+  double plane_sigma_k = 3.0;
+  double plane_distance_m = 0.02;
+  int ransac_max_iterations = 500;
+  double ransac_probability = 0.999;
+  double max_facing_angle_deg = 75.0;  // panel normal vs direction to the camera
+  int refine_iterations = 3;
+
+  // Optional search window from the manifest's nominal distance and angle (when known).
+  bool use_search_window = true;
+  double window_distance_frac = 0.3;  // |range − nominal| ≤ frac·nominal + window_distance_m
+  double window_distance_m = 1.0;
+  double window_angle_deg = 12.0;     // |off-axis angle − nominal| ≤ this
+
+  // Region: the panel outline shrunk by region_margin_px pixels' footprint on every side so
+  // that pixels straddling the edge are left out.
+  double region_margin_px = 0.5;
+
+  std::uint64_t seed = 1;  // RANSAC sampling
+
+  bool IsValid(std::string* why) const;
+
+  // Sets one named parameter from text (as a YAML scalar gives it). Returns false with a reason
+  // for an unknown key or a value that does not parse.
+  bool Set(const std::string& key, const std::string& value, std::string* why);
+  static std::vector<std::string> Keys();
+};
+
+}  // namespace depthbias::panel

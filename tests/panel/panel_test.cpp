@@ -1,0 +1,195 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+#include "panel/extract.h"
+#include "synthetic_scene.h"
+
+namespace depthbias::panel {
+namespace {
+
+using test::Scene;
+using test::SceneSpec;
+
+class VectorSource : public FrameSource {
+ public:
+  explicit VectorSource(const Scene* scene) : scene_(scene) {}
+  bool Next(camera::DepthFrame* f) override {
+    if (k_ >= scene_->spec.frames) return false;
+    *f = scene_->Frame(k_++);
+    return true;
+  }
+  bool Rewind() override {
+    k_ = 0;
+    ++rewinds;
+    return true;
+  }
+  int rewinds = 0;
+
+ private:
+  const Scene* scene_;
+  int k_ = 0;
+};
+
+double IoU(const PanelRegion& region, const std::vector<char>& footprint) {
+  std::vector<char> mask(footprint.size(), 0);
+  for (std::uint32_t i : region.pixels) mask[i] = 1;
+  std::size_t inter = 0, uni = 0;
+  for (std::size_t i = 0; i < mask.size(); ++i) {
+    inter += mask[i] && footprint[i];
+    uni += mask[i] || footprint[i];
+  }
+  return uni ? static_cast<double>(inter) / uni : 0.0;
+}
+
+// Depth step of one 1/32 px disparity step at depth Z: ΔZ = Z²·Δd / (f·B).
+double QuantStep(double z, double fx) { return z * z / 32.0 / (fx * camera::D455::kBaselineM); }
+
+TEST(PanelParams, DefaultsAreValidAndBadValuesAreRefused) {
+  PanelParams p;
+  std::string why;
+  EXPECT_TRUE(p.IsValid(&why)) << why;
+  EXPECT_TRUE(p.Set("panel_width_m", "1.2", &why));
+  EXPECT_DOUBLE_EQ(p.panel_width_m, 1.2);
+  EXPECT_FALSE(p.Set("panel_widht_m", "1", &why));
+  EXPECT_NE(why.find("unknown"), std::string::npos);
+  EXPECT_FALSE(p.Set("seed", "abc", &why));
+  p.size_tolerance = 2;
+  EXPECT_FALSE(p.IsValid(&why));
+}
+
+TEST(PanelGeometry, PlaneFitRecoversKnownPlane) {
+  PlaneMoments m;
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1).normalized();
+  const Eigen::Vector3d c(0.5, 0.2, 6.0);
+  const Eigen::Vector3d a = n.unitOrthogonal(), b = n.cross(a);
+  for (int i = -5; i <= 5; ++i)
+    for (int j = -5; j <= 5; ++j) m.Add(c + 0.1 * i * a + 0.1 * j * b + ((i + j) % 2 ? 0.01 : -0.01) * n);
+  const PlaneFit f = FitPlane(m);
+  ASSERT_TRUE(f.ok);
+  EXPECT_NEAR(std::fabs(f.plane.normal.dot(n)), 1.0, 1e-9);
+  EXPECT_GT(f.plane.normal.dot(-c), 0);
+  EXPECT_NEAR(f.rms_m, 0.01, 1e-3);
+}
+
+struct Point {
+  double distance_m, angle_deg, hole_rate;
+  int frames;  // enough valid samples for the normal (scripts/make_panel_bags.py, frames_for)
+};
+
+class PanelAtTestPoint : public ::testing::TestWithParam<Point> {};
+
+TEST_P(PanelAtTestPoint, FoundAndMeasuredWithinTolerance) {
+  SceneSpec s;
+  s.distance_m = GetParam().distance_m;
+  s.angle_deg = GetParam().angle_deg;
+  s.hole_rate = GetParam().hole_rate;
+  s.frames = GetParam().frames;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  PanelParams p;
+  const ExtractResult r = ExtractPanel(src, scene.in, p);
+  ASSERT_TRUE(r.detection.found) << r.detection.why_not;
+  ASSERT_EQ(r.metrics.status, "ok") << r.metrics.message;
+  EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
+  const double zt = scene.TrueMedianDepth();
+  EXPECT_NEAR(r.metrics.median_m, zt, QuantStep(zt, scene.in.fx) + 0.001 * zt);
+  EXPECT_NEAR(r.metrics.hole_rate_pct, 100 * s.hole_rate, 1.0);
+  const Eigen::Vector3d& c = scene.panel.center;
+  EXPECT_NEAR(r.metrics.azimuth_deg, std::atan2(c.x(), c.z()) * 180 / M_PI, 0.5);
+  EXPECT_NEAR(r.metrics.normal_tilt_deg, std::fabs(s.angle_deg), 2.0);
+  EXPECT_NEAR(r.metrics.panel_width_m, 1.0, 0.1);
+  EXPECT_NEAR(r.metrics.panel_height_m, 1.0, 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    ArticleGrid, PanelAtTestPoint,
+    ::testing::Values(Point{4, 0, 0.05, 20}, Point{4, 35, 0.35, 20}, Point{8, 10, 0.3, 20},
+                      Point{12, 20, 0.75, 20}, Point{16, 0, 0.4, 20}, Point{16, 35, 0.99, 300}));
+
+// A panel with 1 % valid pixels per frame is still found from 30 pooled frames.
+TEST(PanelDetect, SparsePanelIsFoundFromPooledFrames) {
+  SceneSpec s;
+  s.distance_m = 16;
+  s.angle_deg = 35;
+  s.hole_rate = 0.99;
+  s.frames = 30;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  const ExtractResult r = ExtractPanel(src, scene.in, PanelParams{});
+  ASSERT_TRUE(r.detection.found) << r.detection.why_not;
+  EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
+  EXPECT_NEAR(r.metrics.hole_rate_pct, 99.0, 1.0);
+  EXPECT_EQ(r.passes, 1);
+  EXPECT_EQ(src.rewinds, 0);
+}
+
+// detection_frames = 0 pools every frame and measures in a second pass over the source.
+TEST(PanelDetect, PoolingEveryFrameReadsTwice) {
+  SceneSpec s;
+  s.frames = 12;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  PanelParams p;
+  p.detection_frames = 0;
+  const ExtractResult r = ExtractPanel(src, scene.in, p);
+  ASSERT_EQ(r.metrics.status, "ok") << r.metrics.message;
+  EXPECT_EQ(r.passes, 2);
+  EXPECT_EQ(r.frames_read, 24u);
+  EXPECT_EQ(r.metrics.frames, 12);
+}
+
+// The clutter (a bigger wall, a small box) is seen but the panel is chosen.
+TEST(PanelDetect, ClutterDoesNotWin) {
+  SceneSpec s;
+  s.distance_m = 12;
+  s.angle_deg = 10;
+  s.hole_rate = 0.5;
+  s.clutter = true;
+  const Scene scene(s);
+  VectorSource src(&scene);
+  const ExtractResult r = ExtractPanel(src, scene.in, PanelParams{});
+  ASSERT_TRUE(r.detection.found) << r.detection.why_not;
+  EXPECT_GE(r.detection.candidates.size(), 3u);
+  EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
+}
+
+// A scene without a panel gives no_panel and says why; a frame of the wrong size gives error.
+TEST(PanelDetect, NoPanelAndBadFramesAreReported) {
+  SceneSpec s;
+  s.panel_size_m = 3.0;  // a wall, not the 1 × 1 m panel
+  const Scene scene(s);
+  VectorSource src(&scene);
+  const ExtractResult r = ExtractPanel(src, scene.in, PanelParams{});
+  EXPECT_EQ(r.metrics.status, "no_panel");
+  EXPECT_FALSE(r.metrics.message.empty());
+  camera::Intrinsics small = scene.in;
+  small.width = 640;
+  VectorSource src2(&scene);
+  const ExtractResult bad = ExtractPanel(src2, small, PanelParams{});
+  EXPECT_EQ(bad.metrics.status, "error");
+  EXPECT_NE(bad.metrics.message.find("1280x720"), std::string::npos) << bad.metrics.message;
+}
+
+// The manual box over the true panel measures the same depth as the automatic region.
+TEST(PanelExtractBox, BoxInsideThePanelAgreesWithAutomatic) {
+  SceneSpec s;
+  s.distance_m = 8;
+  const Scene scene(s);
+  VectorSource a(&scene), b(&scene);
+  const ExtractResult ra = ExtractPanel(a, scene.in, PanelParams{});
+  ASSERT_EQ(ra.metrics.status, "ok");
+  const PanelRegion& reg = ra.region;
+  const PixelBox box{reg.u_min + 3.0, reg.v_min + 3.0, reg.u_max - 2.0, reg.v_max - 2.0};
+  const ExtractResult rb = ExtractPanel(b, scene.in, PanelParams{}, {}, box);
+  ASSERT_EQ(rb.metrics.status, "ok") << rb.metrics.message;
+  EXPECT_NEAR(rb.metrics.median_m, ra.metrics.median_m, QuantStep(8, scene.in.fx));
+  EXPECT_NEAR(rb.metrics.azimuth_deg, ra.metrics.azimuth_deg, 0.5);
+  EXPECT_NEAR(rb.metrics.normal_tilt_deg, ra.metrics.normal_tilt_deg, 1.0);
+  EXPECT_EQ(rb.metrics.region_px, (reg.u_max - reg.u_min - 5.0) * (reg.v_max - reg.v_min - 5.0));
+}
+
+}  // namespace
+}  // namespace depthbias::panel
