@@ -41,13 +41,26 @@ long long Whole(const std::string& flag, const std::string& text, long long min_
   return v;
 }
 
+double Number(const std::string& flag, const std::string& text) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw Fail(flag + " '" + text + "' is not a number");
+  return v;
+}
+
 std::string Fixed(double v, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, v);
   return buf;
 }
 
-void WriteRecordings(const sim::SimParams& params, const std::string& dir) {
+void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
+                     const std::string& dir) {
   fs::create_directories(dir);
   std::vector<io::ManifestRow> rows;
   for (const sim::Cell& cell : sim::MakeCells(params.protocol)) {
@@ -68,7 +81,7 @@ void WriteRecordings(const sim::SimParams& params, const std::string& dir) {
       writer.Write(frame);
     }
     writer.Close();
-    const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell);
+    const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell, metrics);
     io::ManifestRow row;
     row.bag = bag;
     row.distance_m = cell.distance_m;
@@ -89,10 +102,9 @@ void WriteRecordings(const sim::SimParams& params, const std::string& dir) {
 }
 
 void Calibrate(const sim::SimParams& params, const std::string& real_csv,
-               const std::string& out, int margin_px, int threads) {
+               const std::string& out, const sim::MetricsParams& metrics) {
   sim::CalibrateParams cp;
-  cp.metrics.region_margin_px = margin_px;
-  cp.metrics.threads = threads;
+  cp.metrics = metrics;
   const sim::CalibrationResult r =
       sim::CalibrateSensor(params, io::ReadMetricsCsv(real_csv), cp);
   if (!r.success) throw Fail(real_csv + ": calibration failed: " + r.message);
@@ -131,8 +143,9 @@ void Calibrate(const sim::SimParams& params, const std::string& real_csv,
 int main(int argc, char** argv) {
   std::string protocol_file, sensor_file, effects_file, out_dir, out, calibrate_to;
   bool metrics_only = false;
-  int frames = 0, margin_px = sim::MetricsParams{}.region_margin_px;
-  int threads = std::max(1u, std::thread::hardware_concurrency());
+  int frames = 0;
+  sim::MetricsParams mp;
+  mp.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   sim::SimParams params;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -150,8 +163,8 @@ int main(int argc, char** argv) {
       else if (a == "--metrics-only") metrics_only = true;
       else if (a == "--frames") frames = static_cast<int>(Whole(a, value(), 1));
       else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Whole(a, value(), 0));
-      else if (a == "--margin-px") margin_px = static_cast<int>(Whole(a, value(), 0));
-      else if (a == "--threads") threads = static_cast<int>(Whole(a, value(), 1));
+      else if (a == "--margin-px") mp.region_margin_px = Number(a, value());
+      else if (a == "--threads") mp.threads = static_cast<int>(Whole(a, value(), 1));
       else throw Fail("unknown argument '" + a + "' (see the header of apps/simulate.cpp)");
     }
     if (protocol_file.empty()) throw Fail("--protocol FILE is required");
@@ -174,19 +187,16 @@ int main(int argc, char** argv) {
         throw Fail(effects_file + ": " + why);
     }
     if (frames != 0) params.protocol.frames = frames;
-    if (!params.IsValid(&why)) throw Fail(why);
+    if (!params.IsValid(&why) || !mp.IsValid(&why)) throw Fail(why);
 
     if (!out_dir.empty()) {
-      WriteRecordings(params, out_dir);
+      WriteRecordings(params, mp, out_dir);
     } else if (metrics_only) {
-      sim::MetricsParams mp;
-      mp.region_margin_px = margin_px;
-      mp.threads = threads;
       std::vector<camera::PanelMetrics> rows;
       for (const auto& r : sim::SimulateProtocolMetrics(params, mp)) rows.push_back(r.metrics);
       io::WriteMetricsCsv(out, rows);
     } else {
-      Calibrate(params, calibrate_to, out, margin_px, threads);
+      Calibrate(params, calibrate_to, out, mp);
     }
   } catch (const std::exception& e) {
     std::cerr << "simulate: " << e.what() << "\n";

@@ -48,7 +48,7 @@ class ScenarioResiduals {
 
   bool operator()(double const* const* x, double* residuals) const {
     const ScenarioParams s = Decode(x[0], scenario_);
-    if (!std::isfinite(s.sigma_d_px) || s.sigma_d_px > 20) return false;
+    if (!std::isfinite(s.sigma_d_px)) return false;
     const std::vector<camera::PanelMetrics> sim = Simulate(s);
     for (size_t i = 0; i < cells_.size(); ++i) {
       const double real_std = real_[i].plane_std_m;
@@ -93,6 +93,7 @@ bool CalibrateParams::IsValid(std::string* why) const {
   if (!(valid_scale_pct > 0)) return fail("valid_scale_pct must be > 0");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(relative_step > 0 && relative_step < 0.5)) return fail("relative_step must be in (0, 0.5)");
+  if (!(max_sigma_d_px > 1e-3)) return fail("max_sigma_d_px must be > 0.001");
   return metrics.IsValid(why);
 }
 
@@ -153,12 +154,12 @@ CalibrationResult CalibrateSensor(const SimParams& params,
         functor, ceres::TAKE_OWNERSHIP, nd);
     cost->AddParameterBlock(2);
     cost->SetNumResiduals(functor->num_residuals());
-    double x[2] = {std::log(std::max(fit.initial.sigma_d_px, 1e-3)),
+    double x[2] = {std::log(std::clamp(fit.initial.sigma_d_px, 1e-3, cp.max_sigma_d_px)),
                    Logit(fit.initial.invalid_prob) + kLogitShift};
     ceres::Problem problem;
     problem.AddResidualBlock(cost, nullptr, x);
     problem.SetParameterLowerBound(x, 0, std::log(1e-3));
-    problem.SetParameterUpperBound(x, 0, std::log(5.0));
+    problem.SetParameterUpperBound(x, 0, std::log(cp.max_sigma_d_px));
     problem.SetParameterLowerBound(x, 1, kLogitShift - 12);
     problem.SetParameterUpperBound(x, 1, kLogitShift + 12);
     ceres::Solver::Options options;

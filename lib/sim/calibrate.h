@@ -21,6 +21,10 @@ struct CalibrateParams {
   double valid_scale_pct = 10.0;   // valid_pct residual scale [percentage points]
   int max_iterations = 50;
   double relative_step = 0.05;     // central-difference step on log σ_d and logit p
+  // Upper bound on σ_d. Beyond it the simulated panel at 16 m is a cloud deeper than it is wide
+  // (σ_Z = Z²·σ_d/(f·B) > 0.6 m): the plane fit turns sideways and plane_std saturates near the
+  // panel's own extent, a degenerate optimum that flat real plane_std values would pull towards.
+  double max_sigma_d_px = 0.15;
   MetricsParams metrics;
 
   bool IsValid(std::string* why) const;

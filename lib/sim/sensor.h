@@ -34,9 +34,10 @@ struct SensorParams {
   double emitter_texture = 0.05;         // texture the projector adds at or below its reach
   double emitter_reach_m = 4.0;          // [m]
   // Depth edges: neighbours whose depths differ by more than edge_jump_rel (relative) are an
-  // edge; pixels within edge_band_px of one have at least edge_invalid_prob of being holes.
+  // edge; pixels on its far side (the occluded background, seen by one camera only) within
+  // edge_band_px of it have at least edge_invalid_prob of being holes.
   double edge_jump_rel = 0.05;
-  int edge_band_px = 1;
+  int edge_band_px = 3;
   double edge_invalid_prob = 0.5;
   ScenarioParams fallback;               // for a scenario the table does not list
   std::vector<ScenarioParams> scenarios;

@@ -189,25 +189,35 @@ void StereoSim::Build() {
     }
   }
 
-  // Depth edges: 4-neighbours with a relative depth jump, or one side without a hit.
-  auto jump = [&](size_t a, size_t b) {
-    const bool ha = surface_[a] != 0, hb = surface_[b] != 0;
-    if (ha != hb) return true;
-    if (!ha) return false;
-    const double za = true_depth_m_[a], zb = true_depth_m_[b];
-    return std::fabs(za - zb) > s.edge_jump_rel * std::min(za, zb);
-  };
-  std::vector<unsigned char> edge(n, 0);
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      const size_t i = static_cast<size_t>(v) * w + u;
-      if (u + 1 < w && jump(i, i + 1)) edge[i] = edge[i + 1] = 1;
-      if (v + 1 < h && jump(i, i + w)) edge[i] = edge[i + w] = 1;
-    }
-  // The pixels on both sides of an edge are 1 px from it; a band of b px reaches b − 1 further.
-  const std::vector<unsigned char> near_edge =
-      s.edge_band_px > 0 ? Dilate(edge, w, h, s.edge_band_px - 1)
-                         : std::vector<unsigned char>(n, 0);
+  // Depth edges, occlusion side: where two 4-neighbours' depths jump (relative jump beyond
+  // edge_jump_rel), the far pixel is on the edge's far side, the background one camera sees and
+  // the other does not. It carries the near side's depth; pixels within edge_band_px of it that
+  // are markedly farther than that near depth are in the band.
+  std::vector<unsigned char> near_edge(n, 0);
+  if (s.edge_band_px > 0) {
+    std::vector<float> near_z(n, 1e30f);
+    auto mark = [&](size_t a, size_t b) {
+      if (!surface_[a] && !surface_[b]) return;
+      if (!surface_[a] || !surface_[b]) {  // nothing hit beyond the edge: no depth there anyway
+        const size_t far = surface_[a] ? b : a, near = surface_[a] ? a : b;
+        near_z[far] = std::min(near_z[far], true_depth_m_[near]);
+        return;
+      }
+      const float za = true_depth_m_[a], zb = true_depth_m_[b];
+      if (std::fabs(za - zb) <= s.edge_jump_rel * std::min(za, zb)) return;
+      const size_t far = za > zb ? a : b;
+      near_z[far] = std::min(near_z[far], std::min(za, zb));
+    };
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const size_t i = static_cast<size_t>(v) * w + u;
+        if (u + 1 < w) mark(i, i + 1);
+        if (v + 1 < h) mark(i, i + w);
+      }
+    const std::vector<float> near_min = Extreme(near_z, w, h, s.edge_band_px - 1, false);
+    for (size_t i = 0; i < n; ++i)
+      near_edge[i] = surface_[i] && near_min[i] * (1 + s.edge_jump_rel) < true_depth_m_[i];
+  }
 
   // Edge mixing: the other side of the nearest edge within the mixing width.
   mix_delta_px_.assign(n, 0.f);

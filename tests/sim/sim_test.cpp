@@ -149,15 +149,34 @@ TEST(StereoSim, EmitterAndEdgesChangeHolesTheWayTheModelSays) {
   EXPECT_NEAR(on4, 100.0 / (1 + std::exp(p.sensor.texture_slope * t)), 1.0);
   EXPECT_NEAR(off4, 50.0, 1.0);
   EXPECT_GT(on16, on4);
-  // With no margin the region holds the edge band, where holes are at least edge_invalid_prob.
+  // Depth edges: the far side (the ground just below the panel's lower edge) gets holes with
+  // probability ≥ edge_invalid_prob over edge_band_px rows; the panel's own edge pixels do not.
   p.sensor.fallback.invalid_prob = 0.1;
-  const double inner = Metrics(p, MakeCell(16, 0), 3).hole_rate_pct;
-  const camera::PanelMetrics all = Metrics(p, MakeCell(16, 0), 0);
-  EXPECT_NEAR(inner, 10.0, 1.5);
-  // A square region of side s px with a 1 px band: band share 1 − ((s − 2)/s)².
-  const double side = std::sqrt(all.region_px), band = 1 - std::pow((side - 2) / side, 2);
-  EXPECT_NEAR(side, 40.0, 1.0);
-  EXPECT_NEAR(all.hole_rate_pct, 100 * (band * 0.5 + (1 - band) * 0.1), 1.5);
+  const Cell c = MakeCell(8, 0);
+  const StereoSim sim(p, c);
+  const PixelList panel = sim.PanelPixels(0);
+  int bottom = 0, left = 1280, right = 0;
+  for (int i : panel.window) {
+    bottom = std::max(bottom, i / 1280);
+    left = std::min(left, i % 1280);
+    right = std::max(right, i % 1280);
+  }
+  std::vector<double> holes(9, 0.0), seen(9, 0.0);  // rows bottom−1 … bottom+7
+  camera::DepthFrame frame;
+  for (int k = 0; k < 10; ++k) {
+    sim.Render(k, &frame);
+    for (int r = 0; r < 9; ++r)
+      for (int u = left + 5; u < right - 5; ++u) {
+        ++seen[r];
+        holes[r] += frame.at(u, bottom - 1 + r) == 0;
+      }
+  }
+  for (int r = 0; r < 9; ++r) holes[r] /= seen[r];
+  EXPECT_NEAR(holes[0], 0.1, 0.03);  // the panel's last two rows
+  EXPECT_NEAR(holes[1], 0.1, 0.03);
+  for (int r = 2; r <= 4; ++r) EXPECT_NEAR(holes[r], 0.5, 0.06) << r;  // ground: 3 rows of band
+  for (int r = 5; r <= 8; ++r) EXPECT_LT(holes[r], 0.05) << r;  // textured ground further down
+  EXPECT_EQ(p.sensor.edge_band_px, 3);
 }
 
 TEST(StereoSim, SmoothInItsParameters) {
