@@ -6,8 +6,10 @@
 //   simulate --protocol P --calibrate-to real.csv --out sensor.yaml [...]   fit σ_d and holes
 // --sensor F (or "builtin") overrides the protocol's sensor file; --margin-px M the region margin;
 // --threads N recordings evaluated in parallel by the metrics-only path (default: all cores).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <iostream>
 #include <string>
 #include <thread>
@@ -28,20 +30,8 @@ struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-long long Whole(const std::string& flag, const std::string& text, long long min_value) {
-  size_t used = 0;
-  long long v = 0;
-  try {
-    v = std::stoll(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || v < min_value)
-    throw Fail(flag + " '" + text + "' is not a whole number >= " + std::to_string(min_value));
-  return v;
-}
-
-double Number(const std::string& flag, const std::string& text) {
+// A flag's number: whole numbers >= min_value when whole, else any finite number.
+double Parse(const std::string& flag, const std::string& text, bool whole, double min_value) {
   size_t used = 0;
   double v = 0;
   try {
@@ -49,7 +39,10 @@ double Number(const std::string& flag, const std::string& text) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used == 0 || used != text.size()) throw Fail(flag + " '" + text + "' is not a number");
+  if (used == 0 || used != text.size() || !std::isfinite(v) || v < min_value ||
+      (whole && v != std::floor(v)))
+    throw Fail(flag + " '" + text + "' is not a " + (whole ? "whole " : "") + "number >= " +
+               std::to_string(static_cast<long long>(min_value)));
   return v;
 }
 
@@ -75,10 +68,16 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
     config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
     const std::string bag = cell.name + ".bag";
     io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
-    camera::DepthFrame frame;
+    // Frame k + 1 is rendered while frame k is written.
+    camera::DepthFrame frames[2];
+    simulator.Render(0, &frames[0]);
     for (int k = 0; k < params.protocol.frames; ++k) {
-      simulator.Render(k, &frame);
-      writer.Write(frame);
+      std::future<void> next;
+      if (k + 1 < params.protocol.frames)
+        next = std::async(std::launch::async,
+                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2]); });
+      writer.Write(frames[k % 2]);
+      if (next.valid()) next.get();
     }
     writer.Close();
     const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell, metrics);
@@ -108,27 +107,7 @@ void Calibrate(const sim::SimParams& params, const std::string& real_csv,
   const sim::CalibrationResult r =
       sim::CalibrateSensor(params, io::ReadMetricsCsv(real_csv), cp);
   if (!r.success) throw Fail(real_csv + ": calibration failed: " + r.message);
-  std::printf("%-9s %-6s %-4s %5s %5s %10s %10s %9s %9s\n", "light", "preset", "emit", "D_m",
-              "A_deg", "real_std_m", "sim_std_m", "real_val%", "sim_val%");
-  for (const auto& f : r.scenarios) {
-    for (const auto& c : f.cells)
-      std::printf("%-9s %-6s %-4s %5.0f %5.0f %10.3f %10.3f %9.2f %9.2f\n",
-                  f.fitted.light.c_str(), f.fitted.preset.c_str(), c.emitter.c_str(),
-                  c.distance_m, c.angle_deg, c.real_plane_std_m, c.sim_plane_std_m,
-                  c.real_valid_pct, c.sim_valid_pct);
-  }
-  std::printf("\n%-9s %-6s %3s %10s %12s %9s %9s %9s %9s %8s %8s\n", "light", "preset", "n",
-              "sigma_d_px", "invalid_prob", "real_std", "sim_std", "real_val", "sim_val",
-              "rmslog", "rmsval");
-  for (const auto& f : r.scenarios) {
-    std::printf("%-9s %-6s %3d %10.4f %12.4f %9.3f %9.3f %9.2f %9.2f %8.3f %8.2f\n",
-                f.fitted.light.c_str(), f.fitted.preset.c_str(), f.recordings,
-                f.fitted.sigma_d_px, f.fitted.invalid_prob, f.mean_real_plane_std_m,
-                f.mean_sim_plane_std_m, f.mean_real_valid_pct, f.mean_sim_valid_pct,
-                f.rms_log_plane_std, f.rms_valid_pct);
-    std::printf("  %s\n", f.report.c_str());
-  }
-  if (!r.message.empty()) std::printf("note: %s\n", r.message.c_str());
+  std::fputs(sim::FormatCalibration(r).c_str(), stdout);
   io::WriteFileAtomic(
       out, sim::FormatSensorYaml(
                r.sensor,
@@ -161,10 +140,10 @@ int main(int argc, char** argv) {
       else if (a == "--out") out = value();
       else if (a == "--calibrate-to") calibrate_to = value();
       else if (a == "--metrics-only") metrics_only = true;
-      else if (a == "--frames") frames = static_cast<int>(Whole(a, value(), 1));
-      else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Whole(a, value(), 0));
-      else if (a == "--margin-px") mp.region_margin_px = Number(a, value());
-      else if (a == "--threads") mp.threads = static_cast<int>(Whole(a, value(), 1));
+      else if (a == "--frames") frames = static_cast<int>(Parse(a, value(), true, 1));
+      else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Parse(a, value(), true, 0));
+      else if (a == "--margin-px") mp.region_margin_px = Parse(a, value(), false, 0);
+      else if (a == "--threads") mp.threads = static_cast<int>(Parse(a, value(), true, 1));
       else throw Fail("unknown argument '" + a + "' (see the header of apps/simulate.cpp)");
     }
     if (protocol_file.empty()) throw Fail("--protocol FILE is required");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <map>
 #include <sstream>
@@ -225,6 +226,38 @@ CalibrationResult CalibrateSensor(const SimParams& params,
   if (result.rows_skipped)
     result.message = std::to_string(result.rows_skipped) + " rows skipped (not ok or no target)";
   return result;
+}
+
+std::string FormatCalibration(const CalibrationResult& r) {
+  std::string out;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-9s %-6s %-4s %5s %5s %10s %10s %9s %9s\n", "light",
+                "preset", "emit", "D_m", "A_deg", "real_std_m", "sim_std_m", "real_val%",
+                "sim_val%");
+  out += line;
+  for (const auto& f : r.scenarios)
+    for (const auto& c : f.cells) {
+      std::snprintf(line, sizeof line, "%-9s %-6s %-4s %5.0f %5.0f %10.3f %10.3f %9.2f %9.2f\n",
+                    f.fitted.light.c_str(), f.fitted.preset.c_str(), c.emitter.c_str(),
+                    c.distance_m, c.angle_deg, c.real_plane_std_m, c.sim_plane_std_m,
+                    c.real_valid_pct, c.sim_valid_pct);
+      out += line;
+    }
+  std::snprintf(line, sizeof line, "\n%-9s %-6s %3s %10s %12s %9s %9s %9s %9s %8s %8s\n",
+                "light", "preset", "n", "sigma_d_px", "invalid_prob", "real_std", "sim_std",
+                "real_val", "sim_val", "rms_log", "rms_val");
+  out += line;
+  for (const auto& f : r.scenarios) {
+    std::snprintf(line, sizeof line,
+                  "%-9s %-6s %3d %10.4f %12.4f %9.3f %9.3f %9.2f %9.2f %8.3f %8.2f\n",
+                  f.fitted.light.c_str(), f.fitted.preset.c_str(), f.recordings,
+                  f.fitted.sigma_d_px, f.fitted.invalid_prob, f.mean_real_plane_std_m,
+                  f.mean_sim_plane_std_m, f.mean_real_valid_pct, f.mean_sim_valid_pct,
+                  f.rms_log_plane_std, f.rms_valid_pct);
+    out += line + ("  " + f.report + "\n");
+  }
+  if (!r.message.empty()) out += "note: " + r.message + "\n";
+  return out;
 }
 
 std::string CalibrationYaml(const CalibrationResult& r, const std::string& source) {

@@ -73,6 +73,10 @@ CalibrationResult CalibrateSensor(const SimParams& params,
                                   const std::vector<camera::PanelMetrics>& real,
                                   const CalibrateParams& calibrate = {});
 
+// The fit as a plain table: one line per recording (real and simulated plane_std and
+// valid_pct), then one per scenario (fitted values, means, RMS misfit, Ceres' brief report).
+std::string FormatCalibration(const CalibrationResult& result);
+
 // The fit as YAML (a top-level calibration: block) for the sensor file's record.
 std::string CalibrationYaml(const CalibrationResult& result, const std::string& source);
 
