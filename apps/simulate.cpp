@@ -57,7 +57,7 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
   fs::create_directories(dir);
   std::vector<io::ManifestRow> rows;
   for (const sim::Cell& cell : sim::MakeCells(params.protocol)) {
-    const sim::StereoSim simulator(params, cell);
+    const sim::StereoSim simulator(params, cell, 2);
     io::BagWriterConfig config;
     config.intrinsics = params.sensor.intrinsics;
     config.depth_units_m = params.sensor.depth_units_m;
@@ -70,12 +70,12 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
     io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
     // Frame k + 1 is rendered while frame k is written.
     camera::DepthFrame frames[2];
-    simulator.Render(0, &frames[0]);
+    simulator.Render(0, &frames[0], 2);
     for (int k = 0; k < params.protocol.frames; ++k) {
       std::future<void> next;
       if (k + 1 < params.protocol.frames)
         next = std::async(std::launch::async,
-                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2]); });
+                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2], 2); });
       writer.Write(frames[k % 2]);
       if (next.valid()) next.get();
     }

@@ -81,7 +81,7 @@ std::vector<EffectInfo> MakeRegistry() {
                "the panel is not parallel to the image plane: turned about the vertical",
                "normal_tilt_deg ≈ yaw; the depths spread across the panel (Z varies by "
                "width·sin(yaw)); median almost unchanged; panel narrower in the image",
-               {{"yaw_deg", 10.0, -80.0, 80.0, "deg", "extra turn of the panel about the vertical"}},
+               {{"yaw_deg", 10.0, -80.0, 80.0, "deg", "extra turn about the vertical"}},
                [](const std::map<std::string, double>& p, Departures* d) {
                  d->panel_yaw_deg += p.at("yaw_deg");
                }});

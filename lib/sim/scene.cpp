@@ -54,7 +54,8 @@ bool ParseDistanceIs(const std::string& name, DistanceIs* d) {
 
 bool SceneParams::IsValid(std::string* why) const {
   if (!(camera_height_m > 0)) return Fail(why, "camera_height_m must be > 0");
-  if (!(std::fabs(camera_pitch_deg) < 80)) return Fail(why, "camera_pitch_deg must be in (-80, 80)");
+  if (!(std::fabs(camera_pitch_deg) < 80))
+    return Fail(why, "camera_pitch_deg must be in (-80, 80)");
   if (!(std::fabs(camera_roll_deg) < 80)) return Fail(why, "camera_roll_deg must be in (-80, 80)");
   if (!(panel_width_m > 0) || !(panel_height_m > 0))
     return Fail(why, "panel_width_m and panel_height_m must be > 0");
@@ -166,8 +167,13 @@ RayCaster::RayCaster(const SceneParams& scene, const PanelPose& panel)
 }
 
 Hit RayCaster::Cast(double xn, double yn) const {
-  // The ray p(t) = t·(xn, yn, 1) in the camera frame: t is the depth Z of the point.
-  const Eigen::Vector3d ray(xn, yn, 1.0);
+  // The ray p(t) = t·(xn, yn, 1) in the camera frame: t is the depth Z of the point. Plain
+  // scalars: this runs once per pixel and recording.
+  const Eigen::Vector3d& n = panel_.normal;
+  const Eigen::Vector3d& c = panel_.center_m;
+  const Eigen::Vector3d& aw = panel_.axis_width;
+  const Eigen::Vector3d& ah = panel_.axis_height;
+  const Eigen::Matrix3d& r = level_from_camera_;
   Hit best;
   auto take = [&](double t, Surface s, double texture) {
     if (t > 0 && std::isfinite(t) && (best.surface == Surface::kNone || t < best.depth_m)) {
@@ -177,22 +183,20 @@ Hit RayCaster::Cast(double xn, double yn) const {
     }
   };
   // Panel: n·(t·ray) = n·c, inside the rectangle.
-  const double denom = panel_.normal.dot(ray);
+  const double denom = n.x() * xn + n.y() * yn + n.z();
   if (std::fabs(denom) > 1e-12) {
     const double t = panel_offset_ / denom;
-    const Eigen::Vector3d q = t * ray - panel_.center_m;
-    if (std::fabs(q.dot(panel_.axis_width)) <= 0.5 * panel_.width_m &&
-        std::fabs(q.dot(panel_.axis_height)) <= 0.5 * panel_.height_m)
+    const double qx = t * xn - c.x(), qy = t * yn - c.y(), qz = t - c.z();
+    if (std::fabs(qx * aw.x() + qy * aw.y() + qz * aw.z()) <= 0.5 * panel_.width_m &&
+        std::fabs(qx * ah.x() + qy * ah.y() + qz * ah.z()) <= 0.5 * panel_.height_m)
       take(t, Surface::kPanel, scene_.panel_texture);
   }
-  const Eigen::Vector3d ray_level = level_from_camera_ * ray;
-  // Ground: y_level = camera height.
-  if (ray_level.y() > 1e-12) take(scene_.camera_height_m / ray_level.y(), Surface::kGround,
-                                  scene_.ground_texture);
-  // Background wall: z_level = background distance.
-  if (ray_level.z() > 1e-12)
-    take(scene_.background_distance_m / ray_level.z(), Surface::kBackground,
-         scene_.background_texture);
+  // The ray in the level frame: ground at y_level = camera height, wall at z_level = distance.
+  const double ly = r(1, 0) * xn + r(1, 1) * yn + r(1, 2);
+  const double lz = r(2, 0) * xn + r(2, 1) * yn + r(2, 2);
+  if (ly > 1e-12) take(scene_.camera_height_m / ly, Surface::kGround, scene_.ground_texture);
+  if (lz > 1e-12)
+    take(scene_.background_distance_m / lz, Surface::kBackground, scene_.background_texture);
   return best;
 }
 

@@ -4,11 +4,14 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 
 namespace depthbias::sim {
 namespace {
 
-constexpr int kGaussBits = 12;
+constexpr int kGaussBits = 12;  // bits of a draw that pick the normal quantile
+constexpr int kValidBits = 12;  // bits of the hole draw: p resolved to 1/4096
+constexpr int kMixBits = 8;     // bits of the edge-mixing fraction
 constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15ULL;
 
 // SplitMix64's output function: a counter-based generator, h(seed + i·γ) for draw i.
@@ -16,6 +19,22 @@ inline std::uint64_t Mix64(std::uint64_t z) {
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
   return z ^ (z >> 31);
+}
+
+// Runs f(v_begin, v_end) over [0, rows) split into `threads` bands of rows.
+template <typename F>
+void ForRows(int rows, int threads, F f) {
+  threads = std::clamp(threads, 1, 16);
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t)
+    pool.emplace_back(f, rows * t / threads, rows * (t + 1) / threads);
+  f(0, rows / threads);
+  for (auto& t : pool) t.join();
+}
+
+// The 32 bits of a pair hash that belong to draw `counter` (its low half for even counters).
+inline std::uint32_t HalfOf(std::uint64_t pair_hash, std::uint64_t counter) {
+  return static_cast<std::uint32_t>(counter & 1 ? pair_hash >> 32 : pair_hash);
 }
 
 // 2^12 standard normal quantiles at the midpoints (i + ½)/2^12, rescaled to unit variance:
@@ -125,12 +144,14 @@ std::uint64_t CellSeed(std::uint64_t seed, const std::string& cell_name) {
   return Mix64(Mix64(seed + kGolden) ^ h);
 }
 
-StereoSim::StereoSim(const SimParams& params, const Cell& cell)
+StereoSim::StereoSim(const SimParams& params, const Cell& cell, int threads)
     : StereoSim(params, cell,
-                Window{0, 0, params.sensor.intrinsics.width, params.sensor.intrinsics.height}) {}
+                Window{0, 0, params.sensor.intrinsics.width, params.sensor.intrinsics.height},
+                threads) {}
 
-StereoSim::StereoSim(const SimParams& params, const Cell& cell, const Window& window)
-    : params_(params), cell_(cell), window_(window) {
+StereoSim::StereoSim(const SimParams& params, const Cell& cell, const Window& window,
+                     int threads)
+    : params_(params), cell_(cell), window_(window), threads_(threads) {
   std::string why;
   if (!params_.IsValid(&why)) throw std::invalid_argument("simulation parameters: " + why);
   const auto& in = params_.sensor.intrinsics;
@@ -155,6 +176,7 @@ void StereoSim::Build() {
   truth_.scenario = s.Scenario(cell_.light, cell_.preset, &truth_.scenario_listed);
   truth_.cell_seed = CellSeed(params_.seed, cell_.name);
   sigma_px_ = truth_.scenario.sigma_d_px * dep.sigma_gain;
+  sigma_f_ = static_cast<float>(sigma_px_);
   gauss_ = GaussTable().data();
 
   // Quantized disparity k·step → depth counts; out of [min, max] depth → no entry.
@@ -162,6 +184,9 @@ void StereoSim::Build() {
   k_min_ = static_cast<int>(std::ceil(fb / (s.max_depth_m * s.subpixel_step_px)));
   k_max_ = static_cast<int>(std::floor(fb / (s.min_depth_m * s.subpixel_step_px)));
   k_min_ = std::max(k_min_, 1);
+  inv_step_f_ = static_cast<float>(inv_step_);
+  k_min_f_ = static_cast<float>(k_min_);
+  k_end_f_ = static_cast<float>(k_max_ + 1);
   counts_of_k_.assign(static_cast<size_t>(k_max_) + 1, 0);  // [0] stays 0: no depth
   for (int k = k_min_; k <= k_max_; ++k) {
     const double depth_m = dep.depth_scale * fb / (k * s.subpixel_step_px);  // Z = f·B/d
@@ -176,18 +201,20 @@ void StereoSim::Build() {
   true_depth_m_.assign(n, 0.f);
   surface_.assign(n, 0);
   std::vector<float> texture(n, 0.f), disparity(n, 0.f);
-  for (int v = 0; v < h; ++v) {
-    const double yn = (window_.v0 + v - in.ppy) / in.fy;
-    for (int u = 0; u < w; ++u) {
-      const double xn = (window_.u0 + u - in.ppx) / in.fx;
-      const Hit hit = caster.Cast(xn, yn);
-      const size_t i = static_cast<size_t>(v) * w + u;
-      true_depth_m_[i] = static_cast<float>(hit.depth_m);
-      surface_[i] = static_cast<unsigned char>(hit.surface);
-      texture[i] = static_cast<float>(hit.texture);
-      if (hit.surface != Surface::kNone) disparity[i] = static_cast<float>(fb / hit.depth_m);
+  ForRows(h, threads_, [&](int v_begin, int v_end) {
+    for (int v = v_begin; v < v_end; ++v) {
+      const double yn = (window_.v0 + v - in.ppy) / in.fy;
+      for (int u = 0; u < w; ++u) {
+        const double xn = (window_.u0 + u - in.ppx) / in.fx;
+        const Hit hit = caster.Cast(xn, yn);
+        const size_t i = static_cast<size_t>(v) * w + u;
+        true_depth_m_[i] = static_cast<float>(hit.depth_m);
+        surface_[i] = static_cast<unsigned char>(hit.surface);
+        texture[i] = static_cast<float>(hit.texture);
+        if (hit.surface != Surface::kNone) disparity[i] = static_cast<float>(fb / hit.depth_m);
+      }
     }
-  }
+  });
 
   // Depth edges, occlusion side: where two 4-neighbours' depths jump (relative jump beyond
   // edge_jump_rel), the far pixel is on the edge's far side, the background one camera sees and
@@ -239,37 +266,44 @@ void StereoSim::Build() {
   const double logit_scenario = Logit(truth_.scenario.invalid_prob);
   const bool offset_varies = !dep.disparity_over_time.empty();
   const double g = dep.invalid_odds_gain;
-  for (int v = 0; v < h; ++v) {
-    const double yn = (window_.v0 + v - in.ppy) / in.fy;
-    for (int u = 0; u < w; ++u) {
-      const size_t i = static_cast<size_t>(v) * w + u;
-      if (!surface_[i]) continue;
-      const double xn = (window_.u0 + u - in.ppx) / in.fx;
-      static_disparity_px_[i] =
-          static_cast<float>(disparity[i] + dep.StaticDisparityPx(xn, yn));
-      double t = texture[i];
-      if (cell_.emitter_on) {
-        const double reach = s.emitter_reach_m / true_depth_m_[i];
-        t += s.emitter_texture * std::min(1.0, reach * reach);
+  ForRows(h, threads_, [&](int v_begin, int v_end) {
+    double last_texture = -1, last_p = 0;
+    for (int v = v_begin; v < v_end; ++v) {
+      const double yn = (window_.v0 + v - in.ppy) / in.fy;
+      for (int u = 0; u < w; ++u) {
+        const size_t i = static_cast<size_t>(v) * w + u;
+        if (!surface_[i]) continue;
+        const double xn = (window_.u0 + u - in.ppx) / in.fx;
+        static_disparity_px_[i] =
+            static_cast<float>(disparity[i] + dep.StaticDisparityPx(xn, yn));
+        double t = texture[i];
+        if (cell_.emitter_on) {
+          const double reach = s.emitter_reach_m / true_depth_m_[i];
+          t += s.emitter_texture * std::min(1.0, reach * reach);
+        }
+        if (t != last_texture) {  // surfaces share textures: the logistic once per change
+          last_texture = t;
+          last_p = 1.0 / (1.0 + std::exp(-(logit_scenario -
+                                           s.texture_slope * (t - s.reference_texture))));
+        }
+        double p = last_p;
+        if (truth_.scenario.invalid_prob <= 0) p = 0;
+        if (truth_.scenario.invalid_prob >= 1) p = 1;
+        if (near_edge[i]) p = std::max(p, s.edge_invalid_prob);
+        p = g * p / (1 - p + g * p);  // odds × g
+        if (!std::isfinite(p)) p = 1;
+        valid_threshold_[i] = static_cast<std::uint16_t>(
+            std::lround(std::clamp(1.0 - p, 0.0, 1.0) * (1 << kValidBits)));
+        // A disparity that noise (truncated at 3.5σ) and mixing cannot bring into range never
+        // gives depth: skip its draws (not with a time-varying offset, which has no bound).
+        const double reach_px = 3.6 * sigma_px_ + std::fabs(mix_delta_px_[i]);
+        if (!offset_varies &&
+            ((static_disparity_px_[i] + reach_px) * inv_step_ + 0.5 < k_min_ ||
+             (static_disparity_px_[i] - reach_px) * inv_step_ + 0.5 >= k_max_ + 1))
+          valid_threshold_[i] = 0;
       }
-      double p = 1.0 / (1.0 + std::exp(-(logit_scenario -
-                                          s.texture_slope * (t - s.reference_texture))));
-      if (truth_.scenario.invalid_prob <= 0) p = 0;
-      if (truth_.scenario.invalid_prob >= 1) p = 1;
-      if (near_edge[i]) p = std::max(p, s.edge_invalid_prob);
-      p = g * p / (1 - p + g * p);  // odds × g
-      if (!std::isfinite(p)) p = 1;
-      valid_threshold_[i] =
-          static_cast<std::uint32_t>(std::lround(std::clamp(1.0 - p, 0.0, 1.0) * 65536.0));
-      // A disparity that noise (truncated at 3.5σ) and mixing cannot bring into range never
-      // gives depth: skip its draws (not with a time-varying offset, which has no bound).
-      const double reach_px = 3.6 * sigma_px_ + std::fabs(mix_delta_px_[i]);
-      if (!offset_varies &&
-          ((static_disparity_px_[i] + reach_px) * inv_step_ + 0.5 < k_min_ ||
-           (static_disparity_px_[i] - reach_px) * inv_step_ + 0.5 >= k_max_ + 1))
-        valid_threshold_[i] = 0;
     }
-  }
+  });
 }
 
 std::uint64_t StereoSim::Counter(int frame_index, int pixel) const {
@@ -281,21 +315,29 @@ std::uint64_t StereoSim::Counter(int frame_index, int pixel) const {
          static_cast<std::uint64_t>(v) * in.width + u;
 }
 
-inline std::uint16_t StereoSim::Draw(std::uint64_t counter, int pixel, double offset_px,
-                                     double sigma_px) const {
-  const std::uint64_t r = Mix64(truth_.cell_seed + counter * kGolden);
-  const std::uint32_t uniform_valid = static_cast<std::uint32_t>((r >> 12) & 0xFFFF);
-  const double mix = static_cast<double>((r >> 28) & 0xFFFF) * (1.0 / 65536.0);
-  // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½).
-  const double d = static_disparity_px_[pixel] + offset_px +
-                   sigma_px * gauss_[r & ((1u << kGaussBits) - 1)] + mix * mix_delta_px_[pixel];
-  const double x = d * inv_step_ + 0.5;
-  // Valid, and within [min, max] depth; counts_of_k_[0] = 0 stands for "no depth".
-  const bool ok = (uniform_valid < valid_threshold_[pixel]) & (x >= k_min_) & (x < k_max_ + 1);
+// One 64-bit hash serves two neighbouring draws (counters 2j and 2j + 1): 32 bits each, of
+// which 12 pick the normal quantile, 12 the hole draw and 8 the mixing fraction.
+inline std::uint64_t StereoSim::PairHash(std::uint64_t counter) const {
+  return Mix64(truth_.cell_seed + (counter >> 1) * kGolden);
+}
+
+inline std::uint16_t StereoSim::Draw(std::uint32_t bits, int pixel, float offset_px,
+                                     float sigma_px) const {
+  const std::uint32_t uniform_valid = (bits >> kGaussBits) & ((1u << kValidBits) - 1);
+  const float mix = static_cast<float>(bits >> (kGaussBits + kValidBits)) *
+                    (1.0f / (1 << kMixBits));
+  // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½). Single
+  // precision: d < 200 px is resolved to 2e-5 px, far below the 1/32 px step.
+  const float d = static_disparity_px_[pixel] + offset_px +
+                  sigma_px * gauss_[bits & ((1u << kGaussBits) - 1)] +
+                  mix * mix_delta_px_[pixel];
+  const float x = d * inv_step_f_ + 0.5f;
+  // Valid and within [min, max] depth; counts_of_k_[0] = 0 stands for "no depth".
+  const bool ok = (uniform_valid < valid_threshold_[pixel]) & (x >= k_min_f_) & (x < k_end_f_);
   return counts_of_k_[ok ? static_cast<int>(x) : 0];
 }
 
-void StereoSim::Render(int frame_index, camera::DepthFrame* frame) const {
+void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) const {
   const auto& in = params_.sensor.intrinsics;
   const auto& proto = params_.protocol;
   frame->width = in.width;
@@ -303,29 +345,53 @@ void StereoSim::Render(int frame_index, camera::DepthFrame* frame) const {
   frame->depth_units_m = params_.sensor.depth_units_m;
   frame->frame_number = static_cast<std::uint64_t>(frame_index) + 1;
   frame->timestamp_ms = 1000.0 * frame_index / proto.fps;
-  frame->counts.assign(static_cast<size_t>(in.width) * in.height, 0);
-  const double offset = params_.departures.DisparityAtTimePx(frame_index / proto.fps);
-  for (int v = 0; v < window_.height; ++v) {
-    std::uint16_t* row = frame->counts.data() +
-                         static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
-    const int base = v * window_.width;
-    const std::uint64_t counter = Counter(frame_index, base);
-    for (int u = 0; u < window_.width; ++u)
-      row[u] = Draw(counter + static_cast<std::uint64_t>(u), base + u, offset, sigma_px_);
-  }
+  const size_t n = static_cast<size_t>(in.width) * in.height;
+  const bool whole = window_.width == in.width && window_.height == in.height;
+  if (frame->counts.size() != n || !whole) frame->counts.assign(n, 0);
+  const float offset =
+      static_cast<float>(params_.departures.DisparityAtTimePx(frame_index / proto.fps));
+  auto rows = [&](int v_begin, int v_end) {
+    for (int v = v_begin; v < v_end; ++v) {
+      std::uint16_t* row = frame->counts.data() +
+                           static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
+      const int base = v * window_.width;
+      const std::uint64_t counter = Counter(frame_index, base);
+      std::uint64_t pair = ~0ULL, hash = 0;
+      for (int u = 0; u < window_.width; ++u) {
+        if (!valid_threshold_[base + u]) {  // never gives depth
+          row[u] = 0;
+          continue;
+        }
+        const std::uint64_t c = counter + static_cast<std::uint64_t>(u);
+        if ((c >> 1) != pair) {
+          pair = c >> 1;
+          hash = PairHash(c);
+        }
+        row[u] = Draw(HalfOf(hash, c), base + u, offset, sigma_f_);
+      }
+    }
+  };
+  ForRows(window_.height, threads, rows);
 }
 
 void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
                              std::vector<std::uint16_t>* counts) const {
-  const double offset =
-      params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps);
+  const float offset = static_cast<float>(
+      params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
   const auto& in = params_.sensor.intrinsics;
   const std::uint64_t frame_base = static_cast<std::uint64_t>(frame_index) *
                                    static_cast<std::uint64_t>(in.width) * in.height;
   const size_t n = pixels.window.size();
   counts->resize(n);
-  for (size_t i = 0; i < n; ++i)
-    (*counts)[i] = Draw(frame_base + pixels.image[i], pixels.window[i], offset, sigma_px_);
+  for (size_t i = 0; i < n; ++i) {
+    const int p = pixels.window[i];
+    if (!valid_threshold_[p]) {
+      (*counts)[i] = 0;
+      continue;
+    }
+    const std::uint64_t c = frame_base + pixels.image[i];
+    (*counts)[i] = Draw(HalfOf(PairHash(c), c), p, offset, sigma_f_);
+  }
 }
 
 PixelList StereoSim::RegionPixels(double margin_px) const {

@@ -58,15 +58,17 @@ struct CellTruth {
 class StereoSim {
  public:
   // Throws std::invalid_argument if params are not valid. Without a window, the whole image.
-  StereoSim(const SimParams& params, const Cell& cell);
-  StereoSim(const SimParams& params, const Cell& cell, const Window& window);
+  // The static maps are built by `threads` threads (they do not depend on it).
+  StereoSim(const SimParams& params, const Cell& cell, int threads = 1);
+  StereoSim(const SimParams& params, const Cell& cell, const Window& window, int threads = 1);
 
   const CellTruth& truth() const { return truth_; }
   const Window& window() const { return window_; }
   const SimParams& params() const { return params_; }
 
-  // Frame k (from 0) of the recording: full image size, 0 outside the window.
-  void Render(int frame_index, camera::DepthFrame* frame) const;
+  // Frame k (from 0) of the recording: full image size, 0 outside the window. Rows are split
+  // over `threads` threads (the pixels do not depend on it).
+  void Render(int frame_index, camera::DepthFrame* frame, int threads = 1) const;
   // Depth counts of the listed pixels in frame k: the same values Render gives them.
   void RenderPixels(int frame_index, const PixelList& pixels,
                     std::vector<std::uint16_t>* counts) const;
@@ -82,21 +84,24 @@ class StereoSim {
  private:
   void Build();
   std::uint64_t Counter(int frame_index, int pixel) const;  // the draw's index
-  std::uint16_t Draw(std::uint64_t counter, int pixel, double offset_px, double sigma_px) const;
+  std::uint64_t PairHash(std::uint64_t counter) const;
+  std::uint16_t Draw(std::uint32_t bits, int pixel, float offset_px, float sigma_px) const;
 
   SimParams params_;
   Cell cell_;
   Window window_;
+  int threads_ = 1;
   CellTruth truth_;
   double sigma_px_ = 0;
   const float* gauss_ = nullptr;  // the standard normal table
   double inv_step_ = 32;
+  float inv_step_f_ = 32, k_min_f_ = 0, k_end_f_ = 0, sigma_f_ = 0;  // single-precision copies
   int k_min_ = 0;
   int k_max_ = 0;
   std::vector<std::uint16_t> counts_of_k_;  // depth counts of quantized disparity k·step
   std::vector<float> static_disparity_px_;  // true disparity + static departures; ≤ 0: no depth
   std::vector<float> mix_delta_px_;         // strength·(other side − own disparity)
-  std::vector<std::uint32_t> valid_threshold_;  // valid if a 16-bit uniform is below it
+  std::vector<std::uint16_t> valid_threshold_;  // valid if a 12-bit uniform is below it
   std::vector<float> true_depth_m_;
   std::vector<unsigned char> surface_;
 };

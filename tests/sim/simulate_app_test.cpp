@@ -56,11 +56,9 @@ const std::string kProtocol = DEPTHBIAS_SOURCE_DIR "/config/protocol_paper.yaml"
 TEST(SimulateApp, MetricsOnlyGivesEveryCell) {
   const fs::path d = Dir("metrics_only");
   const std::string out = (d / "m.csv").string();
-  ASSERT_EQ(RunCommand(Bin("simulate") + " --protocol " + kProtocol + " --metrics-only --frames 2" +
-                    " --out " + out,
-                d),
-            0)
-      << Read(d / "stderr.txt");
+  const std::string cmd =
+      Bin("simulate") + " --protocol " + kProtocol + " --metrics-only --frames 2 --out " + out;
+  ASSERT_EQ(RunCommand(cmd, d), 0) << Read(d / "stderr.txt");
   const auto rows = io::ReadMetricsCsv(out);
   ASSERT_EQ(rows.size(), 128u);
   for (const auto& r : rows) {
@@ -97,16 +95,15 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
   std::string err;
   EXPECT_EQ(RunCommand(base + " --effects " + (d / "missing.yaml").string(), d, &err), 1);
   EXPECT_NE(err.find("missing.yaml"), std::string::npos) << err;
-  EXPECT_EQ(RunCommand(Bin("simulate") + " --protocol " + kProtocol + " --frames zero --metrics-only",
-                d, &err),
-            1);
+  const std::string bad_frames =
+      Bin("simulate") + " --protocol " + kProtocol + " --frames zero --metrics-only";
+  EXPECT_EQ(RunCommand(bad_frames, d, &err), 1);
   EXPECT_NE(err.find("--frames"), std::string::npos) << err;
   const fs::path protocol = d / "protocol.yaml";
   Write(protocol, "protocol: {distance_is: slant}\n");
-  EXPECT_EQ(RunCommand(Bin("simulate") + " --protocol " + protocol.string() + " --metrics-only --out " +
-                    (d / "m.csv").string(),
-                d, &err),
-            1);
+  const std::string bad_protocol = Bin("simulate") + " --protocol " + protocol.string() +
+                                   " --metrics-only --out " + (d / "m.csv").string();
+  EXPECT_EQ(RunCommand(bad_protocol, d, &err), 1);
   EXPECT_NE(err.find("protocol.yaml: protocol.distance_is"), std::string::npos) << err;
 }
 
@@ -137,12 +134,10 @@ TEST(SimulateApp, PanelExtractOnWrittenBagsAgreesWithMetricsOnlyOnEveryCell) {
           << Read(run / "stderr.txt");
       ASSERT_EQ(RunCommand(sim + " --metrics-only --out " + (run / "sim.csv").string(), run), 0)
           << Read(run / "stderr.txt");
-      ASSERT_EQ(RunCommand(Bin("panel_extract") + " --jobs 2 --manifest " +
-                        (run / "bags" / "manifest.csv").string() + " --out " +
-                        (run / "extract.csv").string() + " " + (run / "bags").string(),
-                    run),
-                0)
-          << Read(run / "stderr.txt");
+      const std::string extract = Bin("panel_extract") + " --jobs 2 --manifest " +
+                                  (run / "bags" / "manifest.csv").string() + " --out " +
+                                  (run / "extract.csv").string() + " " + (run / "bags").string();
+      ASSERT_EQ(RunCommand(extract, run), 0) << Read(run / "stderr.txt");
       const io::Manifest manifest = io::ReadManifest((run / "bags" / "manifest.csv").string());
       std::map<std::string, camera::PanelMetrics> extracted;
       for (const auto& r : io::ReadMetricsCsv((run / "extract.csv").string()))
