@@ -1,7 +1,8 @@
 // bag_info FILE... [--json]: what a RealSense bag holds (streams, depth intrinsics, depth units,
 // frame count and time span, recorded options, device info). Exits non-zero if any bag cannot
 // be read; with --json, such a bag gives {"file": ..., "error": ...}.
-// --read-all also decodes every depth frame and reports the read rate (for benchmarks).
+// --read-all also decodes every depth frame and reports the read rate (for benchmarks);
+// --partial reads a damaged bag up to the damage.
 
 #include <chrono>
 #include <cstdio>
@@ -16,15 +17,16 @@
 namespace {
 
 void Usage() {
-  std::cerr << "usage: bag_info FILE... [--json] [--read-all]\n"
+  std::cerr << "usage: bag_info FILE... [--json] [--read-all] [--partial]\n"
                "  --json      one JSON object per bag, one per line\n"
+               "  --partial   read a damaged bag up to the damage\n"
                "  --read-all  decode every depth frame and print frames/s\n";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool json = false, read_all = false;
+  bool json = false, read_all = false, partial = false;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -32,6 +34,8 @@ int main(int argc, char** argv) {
       json = true;
     } else if (a == "--read-all") {
       read_all = true;
+    } else if (a == "--partial") {
+      partial = true;
     } else if (a == "-h" || a == "--help") {
       Usage();
       return 0;
@@ -51,7 +55,7 @@ int main(int argc, char** argv) {
   for (const std::string& file : files) {
     try {
       const auto start = std::chrono::steady_clock::now();
-      depthbias::io::BagReader reader(file);
+      depthbias::io::BagReader reader(file, depthbias::io::ReadOptions{partial});
       std::uint64_t frames = 0, checksum = 0;
       if (read_all) {
         depthbias::camera::DepthFrame frame;
@@ -73,6 +77,7 @@ int main(int argc, char** argv) {
         std::cout << out << "\n";
       } else {
         std::cout << depthbias::io::BagSummaryText(reader.info());
+        if (!reader.damage().empty()) std::cout << "damage:      " << reader.damage() << "\n";
         if (read_all)
           std::printf("read-all:    %llu frames in %.3f s = %.1f frames/s (checksum %llu)\n",
                       static_cast<unsigned long long>(frames), seconds,

@@ -3,6 +3,10 @@
 //            [--lambda 0.001] [--loss auto|none|huber|cauchy|soft_l1] [--loss-scale 1.0]
 //            [--group-by light,preset] [--cv point,distance|point|distance|none]
 //            [--weight-valid] [--focal-px 640] [--baseline-m 0.095] [--prior name=mean:strength]
+//            [--nested] [--cv-out heldout.csv]
+// --nested also judges the choice of a model out of sample: every form × {none, huber} is a
+// candidate, chosen in each outer fold by inner cross-validation on that fold's training rows.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -10,6 +14,7 @@
 #include <vector>
 
 #include "io/atomic_file.h"
+#include "io/csv.h"
 #include "io/metrics_csv.h"
 #include "io/sha256.h"
 #include "io/weights_yaml.h"
@@ -43,7 +48,8 @@ double ToDouble(const std::string& flag, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string in, out;
+  std::string in, out, cv_out;
+  bool nested = false;
   model::FitGroupsParams params;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -59,7 +65,9 @@ int main(int argc, char** argv) {
       else if (a == "--loss-scale") params.fit.loss_scale_m = ToDouble(a, value());
       else if (a == "--focal-px") params.fit.focal_px = ToDouble(a, value());
       else if (a == "--baseline-m") params.fit.baseline_m = ToDouble(a, value());
+      else if (a == "--cv-out") cv_out = value();
       else if (a == "--weight-valid") params.fit.weight_by_valid_pixels = true;
+      else if (a == "--nested") nested = true;
       else if (a == "--group-by") params.group_by = Split(value());
       else if (a == "--loss") {
         const std::string v = value();
@@ -88,6 +96,8 @@ int main(int argc, char** argv) {
     return Fail(std::string("bad arguments: ") + e.what());
   }
   if (in.empty() || out.empty()) return Fail("usage: fit_bias --in metrics.csv --out w.yaml");
+  if (io::SameFile(in, out)) return Fail(out + ": the output would overwrite the input");
+  if (nested) params.nested_candidates = model::DefaultCandidates(params.fit);
   std::string why;
   if (!params.IsValid(&why)) return Fail(why);
 
@@ -102,6 +112,7 @@ int main(int argc, char** argv) {
   const model::FitReport report = model::FitGroups(rows, params);
   if (!report.success) return Fail(in + ": " + report.message);
 
+  for (const auto& w : report.warnings) std::cerr << "fit_bias: warning: " << w << "\n";
   camera::BiasWeights weights = model::ToWeights(report, params);
   weights.input_file = in;
   weights.input_sha256 = sha;
@@ -113,25 +124,27 @@ int main(int argc, char** argv) {
     return Fail(e.what());
   }
 
-  std::printf("model %s  loss %s (scale %g m)  lambda %g  rows %d used, %d skipped  %.3f s\n",
-              weights.model.c_str(), weights.loss.c_str(), weights.loss_scale_m, weights.lambda,
-              report.rows_used, report.rows_skipped, report.seconds);
-  std::printf("%-10s %-7s %3s %8s %8s", "light", "preset", "n", "rmse_m", "mae_m");
-  for (auto s : params.cv) {
-    if (s == model::CvScheme::kNone) continue;
-    const std::string n = model::CvSchemeName(s);
-    std::printf(" %14s %13s", ("cv_" + n + "_rmse").c_str(), ("cv_" + n + "_mae").c_str());
-  }
-  std::printf("  weights\n");
-  for (const auto& g : report.groups) {
-    std::printf("%-10s %-7s %3d %8.3f %8.3f", g.group.light.c_str(), g.group.preset.c_str(),
-                g.fit.n, g.fit.rmse_m, g.fit.mae_m);
-    for (const auto& cv : g.cv) std::printf(" %14.3f %13.3f", cv.rmse_m, cv.mae_m);
-    std::printf(" ");
-    for (size_t j = 0; j < g.fit.names.size(); ++j) {
-      std::printf(" %s=%.3f", g.fit.names[j].c_str(), g.fit.values[j]);
+  if (!cv_out.empty()) {
+    // Held-out error of every row under every scheme: which recordings the model cannot explain.
+    std::vector<std::vector<std::string>> cells;
+    for (const auto& g : report.groups) {
+      for (const auto& cv : g.cv) {
+        for (size_t i = 0; i < g.group.rows.size(); ++i) {
+          const auto& r = rows[g.group.rows[i]];
+          cells.push_back({r.bag, g.group.Label(), model::CvSchemeName(cv.scheme),
+                           io::CsvNumber(r.distance_m), io::CsvNumber(r.angle_deg), r.emitter,
+                           io::CsvNumber(r.median_m - r.distance_m),
+                           io::CsvNumber(i < cv.errors_m.size() ? cv.errors_m[i] : NAN)});
+        }
+      }
     }
-    std::printf("\n");
+    try {
+      io::WriteCsv(cv_out, {"bag", "group", "scheme", "distance_m", "angle_deg", "emitter",
+                            "bias_m", "heldout_error_m"}, cells);
+    } catch (const io::IoError& e) {
+      return Fail(e.what());
+    }
   }
+  std::fputs(model::FormatFitTable(report, params).c_str(), stdout);
   return 0;
 }

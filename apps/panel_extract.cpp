@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -11,15 +10,21 @@
 
 #include "io/atomic_file.h"
 #include "io/bag.h"
+#include "io/bag_list.h"
 #include "io/config_file.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
 #include "panel/extract.h"
+#include "panel/prefetch.h"
 
-namespace fs = std::filesystem;
 using namespace depthbias;
 
 namespace {
+
+// A mistake on the command line: the message is followed by the usage line.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 const char* kUsage =
     "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
@@ -40,14 +45,6 @@ class BagSource : public panel::FrameSource {
   std::string path_;
   std::unique_ptr<io::BagReader> reader_;
 };
-
-std::string OptionName(const std::map<std::string, double>& opt, const std::string& key,
-                       const std::map<int, std::string>& names) {
-  const auto it = opt.find(key);
-  if (it == opt.end()) return "";
-  const auto n = names.find(static_cast<int>(std::lround(it->second)));
-  return n != names.end() ? n->second : std::to_string(it->second);
-}
 
 struct Options {
   std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
@@ -89,21 +86,22 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     in = info.depth_intrinsics;
     panel::SearchWindow window;
     if (truth) window = {truth->distance_m, truth->angle_deg};
-    r = panel::ExtractPanel(source, in, params, window, box);
-    const camera::PanelMetrics known = m;
+    const auto preset = info.options.find("Visual_Preset");
+    const auto emitter = info.options.find("Emitter_Enabled");
+    if (preset != info.options.end()) m.preset = io::PresetName(preset->second);
+    if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
+    panel::PrefetchSource ahead(&source, 4);  // read on one core, measure on the other
+    r = panel::ExtractPanel(ahead, in, params, window, box);
+    if (truth && truth->preset) m.preset = *truth->preset;
+    if (truth && truth->emitter) m.emitter = *truth->emitter;
+    const camera::PanelMetrics known = m;  // what the manifest and the bag say
     m = r.metrics;
     m.bag = known.bag;
-    m.preset = OptionName(info.options, "Visual_Preset",
-                          {{0, "Custom"}, {1, "Default"}, {2, "Hand"}, {3, "HA"}, {4, "HD"},
-                           {5, "MD"}});
-    m.emitter = OptionName(info.options, "Emitter_Enabled", {{0, "off"}, {1, "on"}});
-    if (truth) {
-      m.distance_m = known.distance_m;
-      m.angle_deg = known.angle_deg;
-      m.light = known.light;
-      if (truth->preset) m.preset = *truth->preset;
-      if (truth->emitter) m.emitter = *truth->emitter;
-    }
+    m.light = known.light;
+    m.preset = known.preset;
+    m.emitter = known.emitter;
+    m.distance_m = known.distance_m;
+    m.angle_deg = known.angle_deg;
   } catch (const std::exception& e) {
     const std::string what = e.what();
     m.status = "error";
@@ -125,7 +123,7 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::runtime_error(a + " needs a value");
+        if (i + 1 >= argc) throw UsageError(a + " needs a value");
         return argv[++i];
       };
       if (a == "--manifest") o.manifest = value();
@@ -137,12 +135,12 @@ int main(int argc, char** argv) {
       else if (a == "--jobs") o.jobs = std::max(1, std::atoi(value().c_str()));
       else if (a == "--quiet") o.quiet = true;
       else if (a == "--help" || a == "-h") return std::cout << kUsage << "\n", 0;
-      else if (a.rfind("--", 0) == 0) throw std::runtime_error("unknown option " + a);
+      else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
       else o.inputs.push_back(a);
     }
-    if (o.inputs.empty()) throw std::runtime_error("no recording given");
-    if (o.mode != "auto" && o.mode != "box") throw std::runtime_error("--region-mode auto|box");
-    if (o.mode == "box" && o.boxes.empty()) throw std::runtime_error("box mode needs --boxes");
+    if (o.inputs.empty()) throw UsageError("no recording given");
+    if (o.mode != "auto" && o.mode != "box") throw UsageError("--region-mode auto|box");
+    if (o.mode == "box" && o.boxes.empty()) throw UsageError("box mode needs --boxes");
     if (!o.config.empty()) {
       for (const io::ConfigEntry& e : io::ReadConfigScalars(o.config)) {
         std::string why;
@@ -154,20 +152,12 @@ int main(int argc, char** argv) {
     if (!params.IsValid(&why)) throw std::runtime_error(o.config + ": " + why);
     if (!o.manifest.empty()) manifest = std::make_unique<io::Manifest>(io::ReadManifest(o.manifest));
     if (!o.boxes.empty()) boxes = io::ReadBoxes(o.boxes);
-    for (const std::string& in : o.inputs) {
-      if (!fs::is_directory(in)) {
-        jobs.push_back({in, {}, {}});
-        continue;
-      }
-      std::vector<std::string> found;
-      for (const auto& e : fs::recursive_directory_iterator(in))
-        if (e.is_regular_file() && e.path().extension() == ".bag") found.push_back(e.path());
-      if (found.empty()) throw std::runtime_error(in + ": no .bag file in this folder");
-      std::sort(found.begin(), found.end());
-      for (const std::string& f : found) jobs.push_back({f, {}, {}});
-    }
-  } catch (const std::exception& e) {
+    for (const std::string& path : io::ListBags(o.inputs)) jobs.push_back({path, {}, {}});
+  } catch (const UsageError& e) {
     std::cerr << "panel_extract: " << e.what() << "\n" << kUsage << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "panel_extract: " << e.what() << "\n";
     return 2;
   }
 

@@ -7,7 +7,8 @@ one of the article's 16 test points (4, 8, 12, 16 m x 0, 10, 20, 35 deg to the r
 frame is ray-cast, turned into disparity d = f*B/Z, given Gaussian disparity noise, quantized to
 1/32 px and turned back into 1 mm depth counts. Random holes (independent in every frame) take
 5 % to 99 % of the panel's pixels, rising with distance and angle as in the article's hardest
-conditions (16 m, 35 deg, 99 %); the background loses 0.9 times that share. Recordings with few
+conditions (16 m, 35 deg, 99 %); the background loses 0.9 times that share. Bags whose truth
+file is newer than this script are kept, not recorded again. Recordings with few
 valid panel pixels get more frames so that the panel's normal stays measurable (see FRAMES).
 
 Next to every bag: <name>.truth.json (true median depth over the panel footprint, true hole
@@ -235,12 +236,20 @@ def main():
     jobs.append(("clutter_08m_20deg", 8, 20, 0.30, True, seed))
     jobs.append(("clutter_12m_00deg", 12, 0, 0.50, True, seed + 1))
     manifest, boxes = ["bag,distance_m,angle_deg,light"], {}
+    script_time = os.path.getmtime(os.path.abspath(__file__))
     for name, d, a, hole, clutter, s in jobs:
         if args.only and args.only != name:
             continue
         t0 = time.time()
-        truth = make(args.out, name, d, a, hole, frames_for(d, hole), clutter,
-                     not args.uncompressed, s)
+        truth_file = os.path.join(args.out, name + ".truth.json")
+        bag_file = os.path.join(args.out, name + ".bag")
+        if (os.path.exists(bag_file) and os.path.exists(truth_file)
+                and os.path.getmtime(truth_file) > script_time):
+            with open(truth_file) as f:  # written by this version of the script: kept
+                truth = json.load(f)
+        else:
+            truth = make(args.out, name, d, a, hole, frames_for(d, hole), clutter,
+                         not args.uncompressed, s)
         manifest.append("%s.bag,%g,%g,%s" % (name, d, a, "daylight" if s % 3 else "sunset"))
         boxes[name + ".bag"] = truth["box"]
         print("%s: %d frames, %.0f%% holes, %.1fs" % (name, truth["frames"],

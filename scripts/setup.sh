@@ -44,3 +44,11 @@ if [ ${#py_missing[@]} -gt 0 ]; then
   echo "setup: pip installing ${py_missing[*]}"
   $PY -m pip install -q --disable-pip-version-check --root-user-action=ignore "${py_missing[@]}"
 fi
+
+# Optional benchmark dependency: Open3D for the plain-Python peer of
+# scripts/bench_panel_extract.py, which installs it itself when missing. Not needed by the tests;
+# WITH_BENCH=1 installs it here.
+if [ "${WITH_BENCH:-0}" = "1" ] && ! $PY -c "import open3d" 2>/dev/null; then
+  echo "setup: pip installing open3d (benchmark only)"
+  $PY -m pip install -q --disable-pip-version-check --root-user-action=ignore open3d
+fi

@@ -18,7 +18,7 @@ struct BiasCrossValidation {
 struct BiasWeightsGroup {
   std::string light;   // the group's light, or "*" when light is not a grouping key
   std::string preset;  // the group's preset, or "*"
-  std::string emitter; // the group's emitter when it is a grouping key, else "*"
+  std::string emitter = "*";  // the group's emitter when it is a grouping key, else "*"
   int n = 0;           // rows fitted
   std::vector<std::string> names;       // parameter names in the model's order
   std::vector<double> values;           // fitted values, same order

@@ -19,6 +19,10 @@ std::string ReadFile(const std::string& path);
 // True if `path` names an existing regular file.
 bool FileExists(const std::string& path);
 
+// True if both paths exist and name the same file (same device and inode): an output must
+// never overwrite an input.
+bool SameFile(const std::string& a, const std::string& b);
+
 // The last path component ("a/b/c.bag" → "c.bag").
 std::string BaseName(const std::string& path);
 

@@ -72,8 +72,15 @@ struct BagInfo {
   std::map<std::string, std::string> device;   // "Name", "Serial Number", "Firmware Version", ...
 };
 
+// Short name of a D455 Visual_Preset value (rs2_rs400_visual_preset): 3 → "HA" (High
+// Accuracy), 4 → "HD" (High Density), 0 Custom, 1 Default, 2 Hand, 5 Medium Density,
+// 6 Remove IR Pattern; "preset <n>" for any other value.
+std::string PresetName(double visual_preset);
+
 struct ReadOptions {
-  bool allow_partial = false;  // on damage, stop at the last good frame instead of throwing
+  // On damage, stop at the last good frame instead of throwing. A bag without its index (cut
+  // short, or never closed) is then opened by scanning its chunks, and info().indexed is false.
+  bool allow_partial = false;
 };
 
 class BagReader {
@@ -87,7 +94,7 @@ class BagReader {
 
   const BagInfo& info() const;
 
-  // Next depth frame in time order; false at the end. Throws BagError on damage unless
+  // Next depth frame in recorded order; false at the end. Throws BagError on damage unless
   // allow_partial, in which case it returns false and damage() says what was wrong.
   bool Next(camera::DepthFrame* frame);
   const std::string& damage() const;
@@ -99,14 +106,18 @@ class BagReader {
 
 struct BagWriterConfig {
   camera::Intrinsics intrinsics = camera::D455::DepthIntrinsics();
-  double depth_units_m = 0.001;
+  double depth_units_m = 0.001;               // recorded as the Depth_Units option [m]
   double fps = 30.0;
   bool compress_lz4 = false;                  // the D455 records uncompressed by default
-  std::map<std::string, double> options;      // e.g. Visual_Preset, Emitter_Enabled
+  std::map<std::string, double> options;      // e.g. Visual_Preset, Emitter_Enabled (float32)
   std::map<std::string, std::string> device;  // Name, Serial Number, Firmware Version
+
+  bool IsValid(std::string* why) const;
 };
 
-// Writes a depth-only bag in the layout librealsense's recorder writes and its playback reads.
+// Writes a depth-only bag in the layout librealsense's recorder writes and its playback reads
+// (device 0, sensor 0 "Stereo Module", stream Depth_0, mono16). Each frame keeps its own depth
+// units, number and device timestamp. The bag is written to PATH.part and renamed at Close().
 class BagWriter {
  public:
   BagWriter(const std::string& path, BagWriterConfig config);  // throws BagError

@@ -1,11 +1,12 @@
 // Streaming reader of RealSense ROS1 bags. The bag's index (connections and per-chunk message
 // counts) is read at open; frames are then decoded one chunk at a time, so memory holds one
-// chunk (one or two frames) whatever the length of the recording. Chunks are LZ4-decompressed
-// with roslz4, the library rosbag_storage itself uses.
+// chunk (one or two frames) whatever the length of the recording. LZ4 chunks (roslz4's format,
+// which is the LZ4 frame format) are decompressed with liblz4's frame API, which checks them and
+// is faster than roslz4's own decoder; BZ2 chunks with libbz2.
 
 #include <bzlib.h>
 #include <fcntl.h>
-#include <roslz4/lz4s.h>
+#include <lz4frame.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <sstream>
 #include <tuple>
 
 #include "io/bag.h"
@@ -80,9 +82,11 @@ struct BagReader::Impl {
   bool has_depth = false;
   std::uint32_t depth_conn = 0;
   double fallback_units_m = 0.001;
+  bool first_frame_has_units = false;
   std::string damage;
   Cursor cursor;
   bool finished = false;
+  LZ4F_dctx* lz4 = nullptr;
 
   // Recorded metadata, gathered before the first depth frame.
   std::map<int, std::map<std::string, std::string>> device_info;
@@ -94,6 +98,23 @@ struct BagReader::Impl {
 
   ~Impl() {
     if (fd >= 0) ::close(fd);
+    if (lz4) LZ4F_freeDecompressionContext(lz4);
+  }
+
+  // Decompresses one LZ4 frame; false on damaged data or a size other than expected.
+  bool Lz4(const std::uint8_t* in, std::size_t in_size, std::uint8_t* out, std::size_t out_size) {
+    if (!lz4 && LZ4F_isError(LZ4F_createDecompressionContext(&lz4, LZ4F_VERSION))) return false;
+    LZ4F_resetDecompressionContext(lz4);
+    std::size_t done_in = 0, done_out = 0;
+    for (;;) {
+      std::size_t dst = out_size - done_out, src = in_size - done_in;
+      const std::size_t rc = LZ4F_decompress(lz4, out + done_out, &dst, in + done_in, &src, nullptr);
+      if (LZ4F_isError(rc)) return false;
+      done_in += src;
+      done_out += dst;
+      if (rc == 0) return done_out == out_size;  // end of frame
+      if ((src == 0 && dst == 0) || done_in >= in_size) return false;  // stalled or cut short
+    }
   }
 
   [[noreturn]] void Fail(BagError::Kind kind, const std::string& what) const {
@@ -107,7 +128,7 @@ struct BagReader::Impl {
       if (n < 0 && errno == EINTR) continue;
       if (n < 0) Fail(BagError::Kind::kCorrupt, "read error at " + At(offset) + ": " +
                                                     std::strerror(errno));
-      if (n == 0) Fail(BagError::Kind::kTruncated, "ends early at " + At(offset + done));
+      if (n == 0) Fail(BagError::Kind::kTruncated, "truncated: ends early at " + At(offset + done));
       done += static_cast<std::size_t>(n);
     }
   }
@@ -115,8 +136,8 @@ struct BagReader::Impl {
   // Reads the header of the top-level record at offset. Returns its data offset and size.
   RecordHeader ReadRecordHeader(std::uint64_t offset, std::uint64_t* data_offset,
                                 std::uint32_t* data_size) const {
-    if (offset + 4 > file_size) Fail(BagError::Kind::kTruncated, "ends inside the record at " +
-                                                                     At(offset));
+    if (offset + 4 > file_size)
+      Fail(BagError::Kind::kTruncated, "truncated: ends inside the record at " + At(offset));
     std::uint8_t b4[4];
     ReadAt(offset, 4, b4);
     const std::uint32_t header_size = ByteReader(b4, 4).U32();
@@ -124,7 +145,7 @@ struct BagReader::Impl {
       Fail(BagError::Kind::kCorrupt, "record at " + At(offset) + " has a header of " +
                                          std::to_string(header_size) + " bytes");
     if (offset + 8 + header_size > file_size)
-      Fail(BagError::Kind::kTruncated, "ends inside the record at " + At(offset));
+      Fail(BagError::Kind::kTruncated, "truncated: ends inside the record at " + At(offset));
     std::vector<std::uint8_t> h(header_size + 4);
     ReadAt(offset + 4, h.size(), h.data());
     RecordHeader header;
@@ -150,10 +171,12 @@ struct BagReader::Impl {
     file_size = static_cast<std::uint64_t>(st.st_size);
     if (file_size == 0) Fail(BagError::Kind::kEmpty, "is empty (0 bytes)");
     fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) Fail(BagError::Kind::kNotFound, std::string("cannot open: ") + std::strerror(errno));
+    if (fd < 0)
+      Fail(BagError::Kind::kNotFound, std::string("cannot open: ") + std::strerror(errno));
 
     char magic[kMagicSize] = {};
-    const std::size_t head = static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMagicSize));
+    const std::size_t head =
+        static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMagicSize));
     ReadAt(0, head, reinterpret_cast<std::uint8_t*>(magic));
     if (head < kMagicSize || std::memcmp(magic, kMagic, kMagicSize) != 0) {
       if (head >= 9 && std::memcmp(magic, "#ROSBAG V", 9) == 0)
@@ -177,7 +200,8 @@ struct BagReader::Impl {
       Fail(BagError::Kind::kCorrupt, std::string("bag header: ") + e.what());
     }
     first_record = data_offset + data_size;
-    if (first_record > file_size) Fail(BagError::Kind::kTruncated, "ends inside its bag header");
+    if (first_record > file_size)
+      Fail(BagError::Kind::kTruncated, "truncated: ends inside its bag header");
 
     std::string index_problem;
     BagError::Kind index_kind = BagError::Kind::kTruncated;
@@ -241,7 +265,8 @@ struct BagReader::Impl {
       } else if (op == kOpChunkInfo) {
         const std::uint64_t pos = h.U64("chunk_pos");
         const std::uint32_t n = h.U32("count");
-        if (pos < first_record || pos >= index_pos) throw FormatError("chunk position out of range");
+        if (pos < first_record || pos >= index_pos)
+          throw FormatError("chunk position out of range");
         ByteReader d(data, data_size);
         auto& counts = chunk_counts[pos];
         for (std::uint32_t i = 0; i < n; ++i) {
@@ -272,9 +297,10 @@ struct BagReader::Impl {
       if (data_offset + data_size > file_size) {
         const bool chunk = h.Op() == kOpChunk;
         Fail(BagError::Kind::kTruncated,
-             std::string("ends in the middle of ") + (chunk ? "the chunk" : "the record") +
-                 " at " + At(offset) + " (" + std::to_string(file_size - data_offset) + " of " +
-                 std::to_string(data_size) + " bytes present)");
+             std::string("truncated: ends in the middle of ") +
+                 (chunk ? "the chunk" : "the record") + " at " + At(offset) + " (" +
+                 std::to_string(file_size - data_offset) + " of " + std::to_string(data_size) +
+                 " bytes present)");
       }
       offset = data_offset + data_size;
     }
@@ -302,17 +328,24 @@ struct BagReader::Impl {
       const std::uint64_t end = data_offset + data_size;
       const bool cut = end > file_size;
       if (op != kOpChunk) {
-        if (cut) Fail(BagError::Kind::kTruncated, "ends in the middle of the record at " + At(offset));
+        if (cut)
+          Fail(BagError::Kind::kTruncated,
+               "truncated: ends in the middle of the record at " + At(offset));
         c->next_record = end;
         continue;
       }
       if (cut && !(options.allow_partial && compression == "none"))
         Fail(BagError::Kind::kTruncated,
-             "ends in the middle of the chunk at " + At(offset) + " (" +
+             "truncated: ends in the middle of the chunk at " + At(offset) + " (" +
                  std::to_string(file_size - data_offset) + " of " + std::to_string(data_size) +
                  " bytes present)");
       const std::size_t stored = cut ? static_cast<std::size_t>(file_size - data_offset)
                                      : static_cast<std::size_t>(data_size);
+      // LZ4 expands at most ~255 times: a larger claim is a damaged size field.
+      if (compression == "lz4" && plain_size > 255ull * stored + 65536)
+        Fail(BagError::Kind::kCorrupt, "chunk at " + At(offset) + " claims " +
+                                           std::to_string(plain_size) + " bytes from " +
+                                           std::to_string(stored) + " compressed");
       if (plain_size > kMaxChunkBytes)
         Fail(BagError::Kind::kCorrupt, "chunk at " + At(offset) + " claims " +
                                            std::to_string(plain_size) + " bytes");
@@ -327,18 +360,17 @@ struct BagReader::Impl {
         if (c->raw.size() < stored) c->raw.resize(stored);
         ReadAt(data_offset, stored, c->raw.data());
         if (c->data.size() < plain_size) c->data.resize(plain_size);
-        unsigned int out_size = plain_size;
-        int rc;
+        bool ok;
         if (compression == "lz4") {
-          rc = roslz4_buffToBuffDecompress(reinterpret_cast<char*>(c->raw.data()),
-                                           static_cast<unsigned int>(stored),
-                                           reinterpret_cast<char*>(c->data.data()), &out_size);
+          ok = Lz4(c->raw.data(), stored, c->data.data(), plain_size);
         } else {
-          rc = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(c->data.data()), &out_size,
+          unsigned int out_size = plain_size;
+          ok = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(c->data.data()), &out_size,
                                           reinterpret_cast<char*>(c->raw.data()),
-                                          static_cast<unsigned int>(stored), 0, 0);
+                                          static_cast<unsigned int>(stored), 0, 0) == BZ_OK &&
+               out_size == plain_size;
         }
-        if (rc != 0 || out_size != plain_size)
+        if (!ok)
           Fail(BagError::Kind::kCorrupt, compression + " chunk at " + At(offset) +
                                              " does not decompress (damaged data)");
         c->size = plain_size;
@@ -362,8 +394,9 @@ struct BagReader::Impl {
   bool NextInChunk(Cursor* c, Message* m) {
     auto damaged = [&](const std::string& what) {
       if (c->cut)
-        Fail(BagError::Kind::kTruncated,
-             "ends in the middle of the chunk at " + At(c->chunk_pos) + " (" + what + ")");
+        Fail(BagError::Kind::kTruncated, "truncated: ends in the middle of the chunk at " +
+                                             At(c->chunk_pos) + ", inside its record at offset " +
+                                             std::to_string(c->pos));
       Fail(BagError::Kind::kCorrupt, "chunk at " + At(c->chunk_pos) + ": " + what);
     };
     while (c->pos < c->size) {
@@ -427,9 +460,9 @@ struct BagReader::Impl {
   void ChooseDepth() {
     for (const auto& [id, c] : conns) {
       if (!IsDepthImage(c)) continue;
-      if (!has_depth ||
-          std::make_pair(c.parts.sensor, c.parts.stream_index) <
-              std::make_pair(conns[depth_conn].parts.sensor, conns[depth_conn].parts.stream_index)) {
+      const TopicParts& best = conns[depth_conn].parts;
+      if (!has_depth || std::make_pair(c.parts.sensor, c.parts.stream_index) <
+                            std::make_pair(best.sensor, best.stream_index)) {
         has_depth = true;
         depth_conn = id;
       }
@@ -439,7 +472,9 @@ struct BagReader::Impl {
   void ProcessMetadata(const Connection& c, const Message& m) {
     const TopicParts& t = c.parts;
     ByteReader r(m.data, m.size);
-    if (t.device >= 0 && t.sensor < 0 && c.topic == "/device_" + std::to_string(t.device) + "/info") {
+    const bool device_info_topic =
+        t.device >= 0 && t.sensor < 0 && c.topic == "/device_" + std::to_string(t.device) + "/info";
+    if (device_info_topic) {
       std::string key = r.String();
       device_info[t.device][key] = r.String();
     } else if (t.sensor >= 0 && !t.option.empty()) {
@@ -502,6 +537,8 @@ struct BagReader::Impl {
       if (!options.allow_partial) throw;
       damage = e.what();
       finished = info.indexed;  // damage before the first frame of an indexed bag: nothing to read
+      if (!info.indexed) ChooseDepth();
+      if (!has_depth || (info.indexed && !first_seen)) throw;  // nothing readable before it
     }
     if (!has_depth) ChooseDepth();
     BuildInfo(first_seen);
@@ -511,12 +548,11 @@ struct BagReader::Impl {
   void FirstFrame(const Message& m) {
     const ImageView v = DecodeImage(m.data, m.size);
     info.first_timestamp_ms = info.last_timestamp_ms = v.stamp_ms;
-    if (!info.depth.encoding.empty() && info.depth.encoding != v.encoding) info.depth.encoding.clear();
-    if (info.depth.encoding.empty()) info.depth.encoding = v.encoding;
+    info.depth.encoding = v.encoding;  // the frames' own encoding wins over the stream info
     info.depth.width = static_cast<int>(v.width);
     info.depth.height = static_cast<int>(v.height);
-    if (v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0)
-      info.depth_units_m = v.depth_units;
+    first_frame_has_units = v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0;
+    if (first_frame_has_units) info.depth_units_m = v.depth_units;
   }
 
   void LastFrame() {
@@ -598,7 +634,7 @@ struct BagReader::Impl {
     const auto units = info.options.find("Depth_Units");
     if (units != info.options.end() && std::isfinite(units->second) && units->second > 0)
       fallback_units_m = units->second;
-    if (!first_seen) info.depth_units_m = fallback_units_m;
+    if (!first_seen || !first_frame_has_units) info.depth_units_m = fallback_units_m;
     const StreamKey key{sensor, t.stream_type, t.stream_index};
     if (camera_infos.count(key)) {
       const CameraInfoView& ci = camera_infos[key];
@@ -656,6 +692,17 @@ struct BagReader::Impl {
       for (auto& c : frame->counts) c = static_cast<std::uint16_t>((c >> 8) | (c << 8));
   }
 };
+
+std::string PresetName(double visual_preset) {
+  static const char* const kNames[] = {"Custom", "Default", "Hand", "HA",
+                                       "HD", "Medium Density", "Remove IR Pattern"};
+  const double rounded = std::round(visual_preset);
+  if (rounded == visual_preset && rounded >= 0 && rounded <= 6)
+    return kNames[static_cast<int>(rounded)];
+  std::ostringstream name;
+  name << "preset " << visual_preset;
+  return name.str();
+}
 
 BagReader::BagReader(const std::string& path, ReadOptions options) : impl_(new Impl) {
   impl_->path = path;

@@ -41,7 +41,8 @@ std::string Get(const std::map<std::string, std::string>& m, const std::string& 
 
 std::string FormatNumber(double value) {
   char buf[40];
-  const bool is_float = std::isfinite(value) && static_cast<double>(static_cast<float>(value)) == value;
+  const bool is_float =
+      std::isfinite(value) && static_cast<double>(static_cast<float>(value)) == value;
   // %g switches to an exponent when the integer part has more digits than the precision.
   const int integer_digits =
       std::isfinite(value) && std::fabs(value) >= 1.0
@@ -64,8 +65,9 @@ std::string BagSummaryText(const BagInfo& info) {
   o << "file:        " << info.file << "\n";
   o << "compression: " << (info.compressed ? "yes (lz4/bz2 chunks)" : "none") << "\n";
   if (!info.indexed) o << "index:       missing (read by scanning the chunks)\n";
-  o << "device:      " << Get(info.device, "Name") << ", serial " << Get(info.device, "Serial Number")
-    << ", firmware " << Get(info.device, "Firmware Version") << "\n";
+  o << "device:      " << Get(info.device, "Name") << ", serial "
+    << Get(info.device, "Serial Number") << ", firmware "
+    << Get(info.device, "Firmware Version") << "\n";
   o << "streams:\n";
   for (const StreamInfo& s : info.streams) {
     o << "  " << s.stream_type << "_" << s.stream_index << "  sensor " << s.sensor_index << "  "
@@ -92,7 +94,8 @@ std::string BagSummaryText(const BagInfo& info) {
     << (info.last_timestamp_ms - info.first_timestamp_ms) / 1000.0 << " s)\n";
   o.unsetf(std::ios::fixed);
   o << "options:\n";
-  for (const auto& [name, value] : info.options) o << "  " << name << " = " << FormatNumber(value) << "\n";
+  for (const auto& [name, value] : info.options)
+    o << "  " << name << " = " << FormatNumber(value) << "\n";
   o << "device info:\n";
   for (const auto& [key, value] : info.device) o << "  " << key << ": " << value << "\n";
   return o.str();
@@ -101,7 +104,8 @@ std::string BagSummaryText(const BagInfo& info) {
 std::string BagSummaryJson(const BagInfo& info) {
   std::ostringstream o;
   const camera::Intrinsics& in = info.depth_intrinsics;
-  o << "{\"file\":" << Quote(info.file) << ",\"compressed\":" << (info.compressed ? "true" : "false")
+  o << "{\"file\":" << Quote(info.file)
+    << ",\"compressed\":" << (info.compressed ? "true" : "false")
     << ",\"indexed\":" << (info.indexed ? "true" : "false") << ",\"streams\":[";
   for (std::size_t i = 0; i < info.streams.size(); ++i) {
     const StreamInfo& s = info.streams[i];
@@ -115,9 +119,10 @@ std::string BagSummaryJson(const BagInfo& info) {
   if (info.has_depth_intrinsics) {
     o << "{\"width\":" << in.width << ",\"height\":" << in.height << ",\"fx\":" << JsonNumber(in.fx)
       << ",\"fy\":" << JsonNumber(in.fy) << ",\"ppx\":" << JsonNumber(in.ppx)
-      << ",\"ppy\":" << JsonNumber(in.ppy) << ",\"model\":" << Quote(camera::DistortionName(in.model))
-      << ",\"coeffs\":[";
-    for (std::size_t i = 0; i < in.coeffs.size(); ++i) o << (i ? "," : "") << JsonNumber(in.coeffs[i]);
+      << ",\"ppy\":" << JsonNumber(in.ppy)
+      << ",\"model\":" << Quote(camera::DistortionName(in.model)) << ",\"coeffs\":[";
+    for (std::size_t i = 0; i < in.coeffs.size(); ++i)
+      o << (i ? "," : "") << JsonNumber(in.coeffs[i]);
     o << "]}";
   } else {
     o << "null";

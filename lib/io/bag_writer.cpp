@@ -60,7 +60,8 @@ template <>
 struct Serializer<depthbias::io::bag_detail::RawMessage> {
   template <typename Stream>
   inline static void write(Stream& stream, const depthbias::io::bag_detail::RawMessage& m) {
-    if (!m.bytes.empty()) std::memcpy(stream.advance(m.bytes.size()), m.bytes.data(), m.bytes.size());
+    if (m.bytes.empty()) return;
+    std::memcpy(stream.advance(m.bytes.size()), m.bytes.data(), m.bytes.size());
   }
   inline static uint32_t serializedLength(const depthbias::io::bag_detail::RawMessage& m) {
     return static_cast<uint32_t>(m.bytes.size());
@@ -87,6 +88,7 @@ constexpr char kStreamInfoDefinition[] =
     "string encoding   # Stream's data format\n"
     "bool is_recommended # Is this stream recommended by RealSense SDK\n";
 constexpr std::uint32_t kFileVersion = 4;
+constexpr std::uint64_t kFirstFrameNs = 1000000;
 
 template <typename M>
 RawMessage Typed() {
@@ -225,15 +227,30 @@ struct BagWriter::Impl {
   }
 };
 
+bool BagWriterConfig::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  std::string bad;
+  if (!intrinsics.IsValid(&bad)) return fail("invalid intrinsics: " + bad);
+  if (!(depth_units_m > 0) || !std::isfinite(depth_units_m))
+    return fail("depth units must be positive");
+  if (!(fps > 0) || !std::isfinite(fps)) return fail("fps must be positive");
+  for (const auto& [name, value] : options) {
+    if (name.empty() || name.find_first_of("/ ") != std::string::npos)
+      return fail("option name '" + name + "' must be one word without '/'");
+    if (!std::isfinite(value)) return fail("option " + name + " must be finite");
+  }
+  return true;
+}
+
 BagWriter::BagWriter(const std::string& path, BagWriterConfig config) : impl_(new Impl) {
   Impl& d = *impl_;
   d.path = path;
   d.config = std::move(config);
   std::string why;
-  if (!d.config.intrinsics.IsValid(&why)) d.Fail("invalid intrinsics: " + why);
-  if (!(d.config.depth_units_m > 0) || !std::isfinite(d.config.depth_units_m))
-    d.Fail("depth units must be positive");
-  if (!(d.config.fps > 0) || !std::isfinite(d.config.fps)) d.Fail("fps must be positive");
+  if (!d.config.IsValid(&why)) d.Fail(why);
   d.temp_path = path + ".part";
   try {
     d.bag.open(d.temp_path, rosbag::bagmode::Write);
@@ -268,9 +285,12 @@ void BagWriter::Write(const camera::DepthFrame& frame) {
     d.first_ms = frame.timestamp_ms;
     d.have_first = true;
   }
-  // Record time: time since the first frame, as librealsense's recorder stamps it.
+  // Record time: time since the start of the recording, as librealsense's recorder stamps it.
+  // librealsense's playback skips frames stamped at the time of the static information (1 ns),
+  // so frames start 1 ms after it.
   const double elapsed_ns = std::max(0.0, (frame.timestamp_ms - d.first_ms) * 1e6);
-  const std::uint64_t t = std::max<std::uint64_t>(d.last_ns, 1 + static_cast<std::uint64_t>(elapsed_ns));
+  const std::uint64_t t =
+      std::max<std::uint64_t>(d.last_ns, kFirstFrameNs + static_cast<std::uint64_t>(elapsed_ns));
   d.last_ns = t;
 
   RawMessage image = Typed<sensor_msgs::Image>();

@@ -1,6 +1,9 @@
 #include "model/fit_groups.h"
 
 #include <chrono>
+#include <cstdio>
+#include <limits>
+#include <map>
 
 namespace depthbias::model {
 
@@ -42,9 +45,19 @@ FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
       if (s == CvScheme::kNone) continue;
       gr.cv.push_back(CrossValidate(samples, params.fit, s));
       if (!gr.cv.back().success) {
-        report.message = "group " + g.Label() + ": " + CvSchemeName(s) +
-                         " cross-validation: " + gr.cv.back().message;
-        return report;
+        gr.cv.back().rmse_m = gr.cv.back().mae_m = std::numeric_limits<double>::quiet_NaN();
+        report.warnings.push_back("group " + g.Label() + ": no " + CvSchemeName(s) +
+                                  " cross-validation: " + gr.cv.back().message);
+      }
+    }
+    if (!params.nested_candidates.empty() && !params.cv.empty() &&
+        params.cv.front() != CvScheme::kNone) {
+      gr.nested = NestedCrossValidate(samples, params.nested_candidates, params.cv.front(),
+                                      &gr.nested_chosen);
+      if (!gr.nested.success) {
+        gr.nested.rmse_m = std::numeric_limits<double>::quiet_NaN();
+        report.warnings.push_back("group " + g.Label() + ": no nested cross-validation: " +
+                                  gr.nested.message);
       }
     }
     report.groups.push_back(std::move(gr));
@@ -53,6 +66,80 @@ FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.success = true;
   return report;
+}
+
+std::vector<FitParams> DefaultCandidates(const FitParams& base) {
+  std::vector<FitParams> out;
+  for (const auto& name : FormNames()) {
+    for (Loss loss : {Loss::kNone, Loss::kHuber}) {
+      FitParams p = base;
+      p.model = name;
+      p.loss = loss;
+      p.priors.clear();
+      out.push_back(p);
+    }
+  }
+  return out;
+}
+
+std::string FormatFitTable(const FitReport& report, const FitGroupsParams& params) {
+  std::string out;
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "model %s  loss %s (scale %g m)  lambda %g  rows %d used, %d skipped  %.3f s\n",
+                params.fit.model.c_str(),
+                LossName(ResolveLoss(params.fit.loss, params.fit.model)).c_str(),
+                params.fit.loss_scale_m, params.fit.lambda, report.rows_used,
+                report.rows_skipped, report.seconds);
+  out += buf;
+  std::snprintf(buf, sizeof(buf), "%-20s %3s %8s %8s", "group", "n", "rmse_m", "mae_m");
+  out += buf;
+  for (CvScheme s : params.cv) {
+    if (s == CvScheme::kNone) continue;
+    const std::string n = CvSchemeName(s);
+    std::snprintf(buf, sizeof(buf), " %14s %13s", (n + "_cv_rmse").c_str(),
+                  (n + "_cv_mae").c_str());
+    out += buf;
+  }
+  if (!params.nested_candidates.empty()) {
+    std::snprintf(buf, sizeof(buf), " %12s", "nested_rmse");
+    out += buf;
+  }
+  out += "  weights\n";
+  for (const auto& g : report.groups) {
+    std::snprintf(buf, sizeof(buf), "%-20s %3d %8.3f %8.3f", g.group.Label().c_str(), g.fit.n,
+                  g.fit.rmse_m, g.fit.mae_m);
+    out += buf;
+    for (const auto& cv : g.cv) {
+      std::snprintf(buf, sizeof(buf), " %14.3f %13.3f", cv.rmse_m, cv.mae_m);
+      out += buf;
+    }
+    if (!params.nested_candidates.empty()) {
+      std::snprintf(buf, sizeof(buf), " %12.3f", g.nested.rmse_m);
+      out += buf;
+    }
+    out += " ";
+    for (size_t j = 0; j < g.fit.names.size(); ++j) {
+      std::snprintf(buf, sizeof(buf), " %s=%.3f", g.fit.names[j].c_str(), g.fit.values[j]);
+      out += buf;
+    }
+    out += "\n";
+  }
+  if (!params.nested_candidates.empty()) {
+    out += "nested choice (candidate: outer folds that chose it):\n";
+    for (const auto& g : report.groups) {
+      std::map<int, int> count;
+      for (int c : g.nested_chosen) ++count[c];
+      out += "  " + g.group.Label() + ":";
+      for (const auto& [c, k] : count) {
+        const auto& p = params.nested_candidates[static_cast<size_t>(c)];
+        out += " " + p.model + "/" + LossName(ResolveLoss(p.loss, p.model)) + ":" +
+               std::to_string(k);
+      }
+      out += "\n";
+    }
+  }
+  return out;
 }
 
 camera::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params) {

@@ -17,6 +17,10 @@ struct FitGroupsParams {
   FitParams fit;
   std::vector<std::string> group_by = {"light", "preset"};  // DESIGN.md: per (light, preset)
   std::vector<CvScheme> cv = {CvScheme::kPoint, CvScheme::kDistance};  // first = primary
+  // When not empty: also estimate, with the primary scheme, the held-out error of choosing
+  // among these candidates by inner cross-validation (NestedCrossValidate), so that the choice
+  // of a model is itself judged out of sample.
+  std::vector<FitParams> nested_candidates;
 
   bool IsValid(std::string* why) const;
 };
@@ -25,19 +29,31 @@ struct GroupReport {
   Group group;
   FitResult fit;
   std::vector<CvResult> cv;  // as FitGroupsParams::cv, kNone left out
+  CvResult nested;           // when nested_candidates were given
+  std::vector<int> nested_chosen;  // candidate chosen in each outer fold
 };
 
 struct FitReport {
   bool success = false;
   std::string message;       // the first group that failed and why
+  std::vector<std::string> warnings;  // cross-validations that could not run (fit still done)
   std::vector<GroupReport> groups;
   int rows_used = 0;
   int rows_skipped = 0;      // rows whose status is not "ok"
   double seconds = 0.0;      // wall time of fits and cross-validation
 };
 
-// Fits every group; fails (success = false) if there is no "ok" row or any group fails.
+// Fits every group; fails (success = false) if there is no "ok" row or any group's fit fails.
+// A cross-validation the design cannot support (e.g. leave-one-distance-out with two
+// distances) does not fail the run: its result says why and a warning names it.
 FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows, const FitGroupsParams& params);
+
+// Every form × {none, huber} with the fit's other settings: the candidates of a nested check.
+std::vector<FitParams> DefaultCandidates(const FitParams& base);
+
+// A plain-text table of the report: per group n, in-sample and cross-validated RMSE / MAE,
+// the nested estimate if any, and the weights.
+std::string FormatFitTable(const FitReport& report, const FitGroupsParams& params);
 
 // The weights record of a successful report (provenance left empty for the caller).
 camera::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params);

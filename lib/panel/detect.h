@@ -26,7 +26,9 @@ class DepthAccumulator {
   std::uint32_t Count(std::size_t i) const { return n_[i]; }
   // Mean depth of pixel i over its valid samples [m]; 0 without samples.
   double MeanDepth(std::size_t i) const {
-    return n_[i] ? static_cast<double>(sum_[i]) / n_[i] * depth_units_m_ : 0.0;
+    if (n_[i] == 0) return 0.0;
+    const double sum = static_cast<double>(sum_[i]) + (carry_.empty() ? 0.0 : carry_[i]);
+    return sum / n_[i] * depth_units_m_;
   }
 
  private:
@@ -34,7 +36,8 @@ class DepthAccumulator {
   double depth_units_m_ = 0.001;
   std::uint64_t frames_ = 0;
   std::vector<std::uint32_t> n_;
-  std::vector<std::uint64_t> sum_;
+  std::vector<std::uint32_t> sum_;  // 32-bit sums vectorize; carried over every 65535 frames
+  std::vector<double> carry_;
 };
 
 // Nominal position of the panel from the manifest; NaN when unknown.

@@ -4,6 +4,7 @@
 #include <deque>
 #include <iomanip>
 #include <sstream>
+#include <utility>
 
 namespace depthbias::panel {
 namespace {
@@ -23,9 +24,10 @@ bool FrameMatches(const camera::DepthFrame& f, const camera::Intrinsics& in, std
   return true;
 }
 
-void Fail(ExtractResult* r, const std::string& status, const std::string& message) {
+ExtractResult Fail(ExtractResult* r, const std::string& status, const std::string& message) {
   r->metrics.status = status;
   r->metrics.message = message;
+  return std::move(*r);
 }
 
 }  // namespace
@@ -36,17 +38,14 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   ExtractResult res;
   std::string why;
   if (!params.IsValid(&why)) {
-    Fail(&res, "error", "bad parameters: " + why);
-    return res;
+    return Fail(&res, "error", "bad parameters: " + why);
   }
   if (!intrinsics.IsValid(&why)) {
-    Fail(&res, "error", "bad intrinsics: " + why);
-    return res;
+    return Fail(&res, "error", "bad intrinsics: " + why);
   }
   if (intrinsics.model == camera::Distortion::kModifiedBrownConrady) {
-    Fail(&res, "error", "depth stream has Modified Brown-Conrady distortion, which cannot be "
-                        "deprojected");
-    return res;
+    return Fail(&res, "error",
+                "depth stream has Modified Brown-Conrady distortion, which cannot be deprojected");
   }
   const RayTable rays(intrinsics);
   camera::DepthFrame frame;
@@ -57,13 +56,12 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     res.region = RegionFromBox(intrinsics.width, intrinsics.height, box->u0, box->v0, box->u1,
                                box->v1);
     if (res.region.pixels.empty()) {
-      Fail(&res, "error", "the box lies outside the image");
-      return res;
+      return Fail(&res, "error", "the box lies outside the image");
     }
     RegionMeasurer measurer(&rays, res.region, params.baseline_m);
     while (source.Next(&frame)) {
       ++res.frames_read;
-      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
       measurer.Add(frame);
     }
     // The box's centre ray gives a provisional direction; then the box's pixels on the fitted
@@ -72,7 +70,7 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     const Eigen::Vector2d c(0.5 * (box->u0 + box->u1 - 1), 0.5 * (box->v0 + box->v1 - 1));
     const Eigen::Vector2d cr = camera::PixelToNormalized(intrinsics, c);
     res.measure = measurer.Finish({cr.x(), cr.y(), 1.0}, &m);
-    if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not), res;
+    if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not);
     PanelRectangle rect;
     const Plane& pl = res.measure.disparity_plane_ok ? res.measure.disparity_plane
                                                       : res.measure.plane.plane;
@@ -105,23 +103,23 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
       break;
     }
     ++res.frames_read;
-    if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+    if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
     acc.Add(frame);
-    if (cache) cached.push_back(frame);
+    if (cache) {
+      cached.emplace_back();
+      std::swap(cached.back(), frame);
+    }
   }
   if (acc.frames() == 0) {
-    Fail(&res, "error", "the recording holds no depth frame");
-    return res;
+    return Fail(&res, "error", "the recording holds no depth frame");
   }
   res.detection = DetectPanel(rays, acc, params, window);
   if (!res.detection.found) {
-    Fail(&res, "no_panel", res.detection.why_not);
-    return res;
+    return Fail(&res, "no_panel", res.detection.why_not);
   }
   res.region = RegionFromRectangle(rays, res.detection.panel, params.region_margin_px);
   if (res.region.pixels.empty()) {
-    Fail(&res, "no_panel", "the panel's image region is empty after the margin");
-    return res;
+    return Fail(&res, "no_panel", "the panel's image region is empty after the margin");
   }
 
   // Pass 2: measure the region over every frame.
@@ -131,18 +129,17 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     cached.clear();
     while (more && source.Next(&frame)) {
       ++res.frames_read;
-      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
       measurer.Add(frame);
     }
   } else {
     if (!source.Rewind()) {
-      Fail(&res, "error", "cannot read the recording a second time to measure the panel");
-      return res;
+      return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
     }
     res.passes = 2;
     while (source.Next(&frame)) {
       ++res.frames_read;
-      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why), res;
+      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
       measurer.Add(frame);
     }
   }
@@ -150,7 +147,7 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   res.measure = measurer.Finish(res.detection.panel.center_m, &m);
   m.panel_width_m = res.detection.panel.width_m;
   m.panel_height_m = res.detection.panel.height_m;
-  if (!res.measure.ok) Fail(&res, "no_panel", res.measure.why_not);
+  if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not);
   return res;
 }
 

@@ -59,8 +59,9 @@ void RegionMeasurer::Add(const camera::DepthFrame& frame) {
     ++s.n;
     s.z += z;
     s.z2 += z * z;
-    s.inv += 1.0 / z;
-    s.inv2 += 1.0 / (z * z);
+    const double inv = 1.0 / z;
+    s.inv += inv;
+    s.inv2 += inv * inv;
     ++depth_hist_[c];
     const std::size_t r = std::min<std::size_t>(
         kRangeBins - 1, static_cast<std::size_t>(std::lround(c * rays_->Norm(i))));

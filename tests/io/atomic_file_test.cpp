@@ -47,6 +47,13 @@ TEST(AtomicFile, ReadMissingFileNamesIt) {
   }
 }
 
+TEST(AtomicFile, SameFileSeesThroughOtherSpellings) {
+  const auto dir = FreshDir("io");
+  WriteFileAtomic((dir / "a.csv").string(), "x");
+  EXPECT_TRUE(SameFile((dir / "a.csv").string(), (dir / "." / "a.csv").string()));
+  EXPECT_FALSE(SameFile((dir / "a.csv").string(), (dir / "b.csv").string()));
+}
+
 TEST(AtomicFile, BaseNameDropsFolders) {
   EXPECT_EQ(BaseName("a/b/c.bag"), "c.bag");
   EXPECT_EQ(BaseName("c.bag"), "c.bag");

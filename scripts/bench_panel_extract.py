@@ -1,0 +1,176 @@
+#!/usr/bin/env python3
+"""Speed and memory of panel_extract against two peers, side by side, on one recording.
+
+The recording: 300 frames of 1280x720 depth written by librealsense's recorder (uncompressed,
+as the D455 records), the 8 m / 20 deg panel scene of make_panel_bags.py. Every contender reads
+the same file, after one read to put it in the page cache. Each runs in its own process, so its
+peak memory (ru_maxrss from wait4) is its own.
+
+  panel_extract   the whole tool: read the bag, detect the panel, measure it, write the CSV
+  (a) playback    pyrealsense2 playback alone, non-real-time, every depth frame's data touched
+  (b) python      pyrealsense2 playback + numpy deprojection + Open3D segment_plane twice per
+                  frame (ground, then the panel in what is left); Open3D is installed here by
+                  pip if missing (an optional benchmark dependency, not needed by the tests).
+                  Run on the first --python-frames frames, frames/s from those.
+
+Targets: panel_extract >= 300 frames/s, no slower than (a), >= 20x faster than (b), peak
+memory <= 500 MB.
+
+Usage: bench_panel_extract.py [--bin build/apps] [--work build/bench_panel] [--frames 300]
+                              [--python-frames 20] [--repeat 3]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def run(cmd):
+    """Runs cmd under /usr/bin/time (so the peak RSS is the program's own, not inherited from
+    this script by fork); returns (wall seconds, peak RSS MB, stdout)."""
+    rss_file = os.path.join(os.environ.get("TMPDIR", "/tmp"), "bench_rss_%d.txt" % os.getpid())
+    t0 = time.perf_counter()
+    p = subprocess.run(["/usr/bin/time", "-f", "%M", "-o", rss_file] + cmd,
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    wall = time.perf_counter() - t0
+    if p.returncode != 0:
+        sys.exit("failed: %s\n%s" % (" ".join(cmd), p.stderr.decode()))
+    with open(rss_file) as f:
+        rss_kb = float(f.read().split()[-1])
+    os.remove(rss_file)
+    return wall, rss_kb / 1024.0, p.stdout.decode()
+
+
+def open_playback(path):
+    """pyrealsense2 pipeline playing the file back as fast as it is read (non-real-time)."""
+    import pyrealsense2 as rs
+    pipe, cfg = rs.pipeline(), rs.config()
+    cfg.enable_device_from_file(path, repeat_playback=False)
+    prof = pipe.start(cfg)
+    prof.get_device().as_playback().set_real_time(False)
+    return pipe, prof
+
+
+def peer_playback(path):
+    import numpy as np
+    t0 = time.perf_counter()  # from opening the file, as panel_extract's run does
+    pipe, _ = open_playback(path)
+    n, checksum, t_last = 0, 0, t0
+    while True:
+        ok, fs = pipe.try_wait_for_frames(1000)
+        if not ok:
+            break
+        checksum += int(np.asanyarray(fs.get_depth_frame().get_data())[-1, 640])
+        n += 1
+        t_last = time.perf_counter()
+    pipe.stop()
+    print(json.dumps(dict(frames=n, seconds=t_last - t0, checksum=checksum)))
+
+
+def peer_python(path, max_frames):
+    import numpy as np
+    import open3d as o3d
+    import pyrealsense2 as rs
+    t0 = time.perf_counter()
+    pipe, prof = open_playback(path)
+    intr = prof.get_stream(rs.stream.depth).as_video_stream_profile().get_intrinsics()
+    u, v = np.meshgrid(np.arange(intr.width), np.arange(intr.height))
+    rx = ((u - intr.ppx) / intr.fx).ravel()
+    ry = ((v - intr.ppy) / intr.fy).ravel()
+    n, panel_z = 0, []
+    while n < max_frames:
+        ok, fs = pipe.try_wait_for_frames(5000)
+        if not ok:
+            break
+        d = fs.get_depth_frame()
+        z = np.asanyarray(d.get_data()).ravel() * d.get_units()
+        ok = z > 0
+        pts = np.stack([rx[ok] * z[ok], ry[ok] * z[ok], z[ok]], axis=1)
+        pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts))
+        _, ground = pcd.segment_plane(distance_threshold=0.08, ransac_n=3, num_iterations=100)
+        rest = pcd.select_by_index(ground, invert=True)
+        _, panel = rest.segment_plane(distance_threshold=0.1, ransac_n=3, num_iterations=100)
+        panel_z.append(float(np.median(np.asarray(rest.points)[panel][:, 2])))
+        n += 1
+    t1 = time.perf_counter()
+    pipe.stop()
+    print(json.dumps(dict(frames=n, seconds=t1 - t0, median_z=float(np.median(panel_z)))))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bin", default=os.path.join(HERE, "..", "build", "apps"))
+    ap.add_argument("--work", default=os.path.join(HERE, "..", "build", "bench_panel"))
+    ap.add_argument("--frames", type=int, default=300)
+    ap.add_argument("--python-frames", type=int, default=20)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--peer", help=argparse.SUPPRESS)
+    ap.add_argument("--file", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.peer == "playback":
+        return peer_playback(args.file)
+    if args.peer == "python":
+        return peer_python(args.file, args.python_frames)
+
+    os.makedirs(args.work, exist_ok=True)
+    bag = os.path.join(args.work, "bench_panel.bag")
+    truth_file = os.path.join(args.work, "bench_panel.truth.json")
+    if not os.path.exists(truth_file) or json.load(open(truth_file))["frames"] != args.frames:
+        subprocess.check_call([sys.executable, os.path.join(HERE, "make_panel_bags.py"),
+                               args.work, "--bench", str(args.frames), "--uncompressed"])
+    if subprocess.call([sys.executable, "-c", "import open3d"], stderr=subprocess.DEVNULL):
+        print("bench: pip installing open3d (optional benchmark dependency)", flush=True)
+        subprocess.check_call([sys.executable, "-m", "pip", "install", "-q",
+                               "--disable-pip-version-check", "open3d"])
+    with open(bag, "rb") as f:  # page cache, the same for everyone
+        while f.read(1 << 24):
+            pass
+    size_mb = os.path.getsize(bag) / 1e6
+    out_csv = os.path.join(args.work, "metrics.csv")
+    tool = os.path.join(args.bin, "panel_extract")
+
+    rows = []
+    best = None
+    for _ in range(args.repeat):
+        wall, rss, _ = run([tool, "--quiet", "--out", out_csv, bag])
+        best = min(best or (wall, rss), (wall, rss))
+    rows.append(("panel_extract", args.frames, best[0], best[1]))
+    best = None
+    for _ in range(args.repeat):
+        wall, rss, out = run([sys.executable, __file__, "--peer", "playback", "--file", bag])
+        r = json.loads(out)
+        if r["frames"] != args.frames:
+            sys.exit("playback delivered %d of %d frames" % (r["frames"], args.frames))
+        best = min(best or (r["seconds"], rss), (r["seconds"], rss))
+    rows.append(("(a) pyrealsense2 playback", args.frames, best[0], best[1]))
+    wall, rss, out = run([sys.executable, __file__, "--peer", "python", "--file", bag,
+                          "--python-frames", str(args.python_frames)])
+    r = json.loads(out)
+    rows.append(("(b) python + open3d", r["frames"], r["seconds"], rss))
+
+    fps = {name: n / s for name, n, s, _ in rows}
+    tool_fps = fps["panel_extract"]
+    print("recording: %s (%d frames 1280x720, %.0f MB), %d cores, best of %d runs" %
+          (bag, args.frames, size_mb, os.cpu_count(), args.repeat))
+    print("%-28s %7s %9s %10s %12s %11s" % ("", "frames", "seconds", "frames/s",
+                                            "tool speedup", "peak MB"))
+    for name, n, s, mb in rows:
+        print("%-28s %7d %9.3f %10.1f %11.1fx %11.0f" % (name, n, s, n / s, tool_fps / (n / s),
+                                                          mb))
+    checks = [
+        ("panel_extract >= 300 frames/s", tool_fps >= 300),
+        ("panel_extract no slower than (a)", tool_fps >= fps["(a) pyrealsense2 playback"]),
+        ("panel_extract >= 20x faster than (b)", tool_fps >= 20 * fps["(b) python + open3d"]),
+        ("panel_extract peak memory <= 500 MB", rows[0][3] <= 500),
+    ]
+    for text, ok in checks:
+        print("%-40s %s" % (text, "yes" if ok else "NO"))
+    return 0 if all(ok for _, ok in checks) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

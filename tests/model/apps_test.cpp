@@ -1,0 +1,216 @@
+// Runs the real fit_bias and correct_depth on the real article data and on malformed inputs.
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "io/atomic_file.h"
+#include "io/csv.h"
+#include "io/weights_yaml.h"
+
+namespace depthbias {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kArticle = DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv";
+const std::string kTable6 = DEPTHBIAS_SOURCE_DIR "/config/data/paper_table6.csv";
+
+struct AppRun {
+  int code = -1;
+  std::string out, err;
+};
+
+fs::path Dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  fs::path d = fs::path(DEPTHBIAS_BINARY_DIR) / "test_tmp" / (std::string("apps_") + info->name());
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+AppRun Exec(const std::string& app, const std::string& args, const fs::path& dir) {
+  const char* bin = std::getenv("DEPTHBIAS_BIN");
+  const std::string exe = std::string(bin ? bin : DEPTHBIAS_BINARY_DIR "/apps") + "/" + app;
+  const std::string cmd = exe + " " + args + " > " + (dir / "stdout").string() + " 2> " +
+                          (dir / "stderr").string();
+  AppRun r;
+  const int status = std::system(cmd.c_str());
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = io::ReadFile((dir / "stdout").string());
+  r.err = io::ReadFile((dir / "stderr").string());
+  return r;
+}
+
+void Write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
+
+// Expects a failed run: non-zero exit, one line on stderr containing `needle`, no output file.
+void ExpectCleanFailure(const AppRun& r, const fs::path& out, const std::string& needle) {
+  EXPECT_NE(r.code, 0);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out)) << out;
+}
+
+TEST(FitBiasApp, ReproducesTable6OnTheArticlesData) {
+  const auto dir = Dir();
+  const auto out = dir / "w.yaml";
+  const AppRun r = Exec("fit_bias", "--in " + kArticle + " --out " + out.string() +
+                                     " --model paper6 --lambda 0.001", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("sunset"), std::string::npos);
+  const auto w = io::ReadWeightsYaml(out.string());
+  EXPECT_EQ(w.model, "paper6");
+  EXPECT_EQ(w.loss, "none");
+  EXPECT_EQ(w.tool, "fit_bias");
+  EXPECT_EQ(w.input_sha256.size(), 64u);
+  ASSERT_EQ(w.groups.size(), 4u);
+  const io::CsvTable t = io::ReadCsv(kTable6);
+  const std::map<std::string, std::vector<double>> dashes = {{"sunset/HA", {-0.494, -0.358}},
+                                                             {"sunset/HD", {-0.279, -0.358}}};
+  for (size_t r6 = 0; r6 < t.rows.size(); ++r6) {
+    const std::string key = t.Cell(r6, 0) + "/" + t.Cell(r6, 1);
+    const camera::BiasWeightsGroup* g = nullptr;
+    for (const auto& x : w.groups) {
+      if (x.light + "/" + x.preset == key) g = &x;
+    }
+    ASSERT_NE(g, nullptr) << key;
+    EXPECT_EQ(g->n, 32);
+    ASSERT_EQ(g->names.size(), 6u);
+    for (int j = 0; j < 6; ++j) {
+      const double printed = t.Number(r6, t.RequireColumn(g->names[j]));
+      const double expected =
+          std::isnan(printed) ? dashes.at(key)[j == 0 ? 0 : 1] : printed;
+      EXPECT_NEAR(g->values[j], expected, std::isnan(printed) ? 0.0005 : 0.005)
+          << key << " " << g->names[j];
+    }
+    EXPECT_NEAR(g->rmse_m, t.Number(r6, t.RequireColumn("rmse_m")), 0.002) << key;
+    EXPECT_NEAR(g->mae_m, t.Number(r6, t.RequireColumn("mae_m")), 0.002) << key;
+    ASSERT_EQ(g->cv.size(), 2u);
+    EXPECT_EQ(g->cv[0].scheme, "point");
+    EXPECT_GT(g->cv[0].rmse_m, g->rmse_m);  // out of sample is worse than in sample
+    EXPECT_EQ(g->covariance.size(), 6u);
+  }
+}
+
+// DESIGN.md's goal: the disparity-space default beats eq. 6 out of sample in every scenario.
+TEST(FitBiasApp, DefaultModelBeatsPaper6LeaveOnePointOut) {
+  const auto dir = Dir();
+  ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + (dir / "p6.yaml").string() +
+                                 " --model paper6 --cv point", dir).code, 0);
+  const AppRun r = Exec("fit_bias", "--in " + kArticle + " --out " + (dir / "d.yaml").string() +
+                                     " --cv point", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto p6 = io::ReadWeightsYaml((dir / "p6.yaml").string());
+  const auto def = io::ReadWeightsYaml((dir / "d.yaml").string());
+  EXPECT_EQ(def.model, "disp_knots");
+  ASSERT_EQ(p6.groups.size(), def.groups.size());
+  for (size_t i = 0; i < def.groups.size(); ++i) {
+    EXPECT_LT(def.groups[i].cv[0].rmse_m, p6.groups[i].cv[0].rmse_m)
+        << def.groups[i].light << "/" << def.groups[i].preset;
+  }
+}
+
+TEST(FitBiasApp, BadInputsFailCleanlyWithoutOutput) {
+  const auto dir = Dir();
+  const auto out = dir / "w.yaml";
+  const std::string header =
+      "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+      "hole_rate_pct,valid_pct\n";
+  Write(dir / "missing.csv", "bag,light,emitter,preset,distance_m,frames\nx,d,on,HA,4,1\n");
+  ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "missing.csv").string() + " --out " +
+                                          out.string(), dir),
+                     out, "angle_deg");
+  Write(dir / "nan.csv", header + "x,d,on,HA,4,0,9,4,nan,0.1,1,99\n");
+  ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "nan.csv").string() + " --out " +
+                                          out.string(), dir),
+                     out, "nan.csv:2");
+  // A group with fewer rows than parameters: the article's data with sunset/HD cut to 4 rows.
+  std::string article = io::ReadFile(kArticle), small;
+  std::istringstream lines(article);
+  int hd_sunset = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find(",sunset,") != std::string::npos && line.find(",HD,") != std::string::npos &&
+        ++hd_sunset > 4) {
+      continue;
+    }
+    small += line + "\n";
+  }
+  Write(dir / "small.csv", small);
+  ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "small.csv").string() + " --out " +
+                                          out.string() + " --model paper6", dir),
+                     out, "4 points for 6 parameters");
+  // A single distance: singular.
+  std::string single = header;
+  for (int a : {0, 10, 20, 35}) {
+    for (const char* e : {"on", "off"}) {
+      single += std::string("r") + std::to_string(a) + e + ",d," + e + ",HA,8," +
+                std::to_string(a) + ",9,7.9,7.9,0.1,1,99\n";
+    }
+  }
+  Write(dir / "single.csv", single);
+  ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "single.csv").string() + " --out " +
+                                          out.string(), dir),
+                     out, "singular design");
+  ExpectCleanFailure(Exec("fit_bias", "--in " + kArticle + " --out " + out.string() +
+                                          " --model cubic", dir),
+                     out, "unknown model 'cubic'");
+  Write(dir / "copy.csv", io::ReadFile(kArticle));
+  const AppRun same = Exec("fit_bias", "--in " + (dir / "copy.csv").string() + " --out " +
+                                        (dir / "copy.csv").string(), dir);
+  EXPECT_NE(same.code, 0);
+  EXPECT_EQ(io::ReadFile((dir / "copy.csv").string()), io::ReadFile(kArticle));  // untouched
+  ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "none.csv").string() + " --out " +
+                                          out.string(), dir),
+                     out, "none.csv");
+}
+
+TEST(CorrectDepthApp, AddsColumnsAndRefusesBadWeights) {
+  const auto dir = Dir();
+  const auto w = dir / "w.yaml";
+  ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + w.string() + " --cv none", dir)
+                .code, 0);
+  const auto out = dir / "c.csv";
+  const AppRun r = Exec("correct_depth", "--weights " + w.string() + " --in " + kArticle +
+                                          " --out " + out.string() + " --k 2", dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const io::CsvTable t = io::ReadCsv(out.string());
+  ASSERT_EQ(t.rows.size(), 128u);
+  const int dist = t.RequireColumn("distance_m"), corr = t.RequireColumn("corrected_m");
+  const int res = t.RequireColumn("residual_m"), margin = t.RequireColumn("margin_m");
+  const int bias = t.RequireColumn("predicted_bias_m"), med = t.RequireColumn("median_m");
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    EXPECT_NEAR(t.Number(i, res), t.Number(i, corr) - t.Number(i, dist), 1e-9);
+    EXPECT_NEAR(t.Number(i, corr), t.Number(i, med) - t.Number(i, bias), 1e-9);
+    EXPECT_LT(t.Number(i, margin), t.Number(i, corr));
+  }
+  // A scenario the weights do not hold.
+  Write(dir / "other.csv", io::ReadFile(kArticle) + "z,night,on,HA,4,0,9,4,4,0.1,1,99\n");
+  const auto out2 = dir / "c2.csv";
+  ExpectCleanFailure(Exec("correct_depth", "--weights " + w.string() + " --in " +
+                                               (dir / "other.csv").string() + " --out " +
+                                               out2.string(), dir),
+                     out2, "no model for scenario light 'night'");
+  // YAML of another schema, and wrong types.
+  Write(dir / "other.yaml", "panel:\n  ransac_iterations: 100\n");
+  ExpectCleanFailure(Exec("correct_depth", "--weights " + (dir / "other.yaml").string() +
+                                               " --in " + kArticle + " --out " + out2.string(),
+                          dir),
+                     out2, "not a depthbias weights file");
+  std::string text = io::ReadFile(w.string());
+  text.replace(text.find("n: 32"), 5, "n: many");
+  Write(dir / "typo.yaml", text);
+  ExpectCleanFailure(Exec("correct_depth", "--weights " + (dir / "typo.yaml").string() +
+                                               " --in " + kArticle + " --out " + out2.string(),
+                          dir),
+                     out2, "groups[0].n");
+}
+
+}  // namespace
+}  // namespace depthbias
