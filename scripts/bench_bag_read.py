@@ -8,12 +8,13 @@ holes, like a real depth image), so both readers see the layout the camera write
 runs REPEAT times on a warm page cache; the best run counts. Also prints the peak resident memory
 of bag_info reading the whole bag (it should not grow with the bag's length).
 
-Usage: scripts/bench_bag_read.py [--bin build/apps] [--frames 300] [--repeat 3] [--keep DIR]
+Usage: scripts/bench_bag_read.py [--bin build/apps] [--frames 300] [--repeat 5] [--keep DIR]
 """
 import argparse
 import json
 import os
 import re
+import resource
 import shutil
 import subprocess
 import sys
@@ -71,11 +72,19 @@ def record(path, frames, compress):
     del rec
 
 
+def cpu_seconds(who):
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
 def ours(bin_dir, path):
+    """Frames, wall seconds, CPU seconds (all threads) of bag_info --read-all."""
+    cpu0 = cpu_seconds(resource.RUSAGE_CHILDREN)
     out = subprocess.run([os.path.join(bin_dir, "bag_info"), path, "--json", "--read-all"],
                          check=True, capture_output=True, text=True).stdout
+    cpu = cpu_seconds(resource.RUSAGE_CHILDREN) - cpu0
     r = json.loads(out)["read_all"]
-    return r["frames"], r["seconds"]
+    return r["frames"], r["seconds"], cpu
 
 
 def ours_peak_rss_kb(bin_dir, path):
@@ -88,6 +97,7 @@ def ours_peak_rss_kb(bin_dir, path):
 def librealsense(path, frames_expected):
     """Non-real-time playback of every depth frame; the callback touches each frame's pixels."""
     done = []
+    cpu0 = cpu_seconds(resource.RUSAGE_SELF)
     start = time.perf_counter()
     ctx = rs.context()
     dev = ctx.load_device(path)
@@ -110,10 +120,11 @@ def librealsense(path, frames_expected):
             break
         time.sleep(0.001)
     end = done[-1] if done else time.perf_counter()
+    cpu = cpu_seconds(resource.RUSAGE_SELF) - cpu0
     n = len(done)
     sensor.stop()
     sensor.close()
-    return n, end - start
+    return n, end - start, cpu
 
 
 def main():
@@ -121,7 +132,7 @@ def main():
     here = os.path.dirname(os.path.abspath(__file__))
     ap.add_argument("--bin", default=os.path.join(here, "..", "build", "apps"))
     ap.add_argument("--frames", type=int, default=300)
-    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--keep", help="folder to record into and keep (default: a temp folder)")
     args = ap.parse_args()
     work = args.keep or tempfile.mkdtemp(prefix="bench_bag_read_")
@@ -138,25 +149,31 @@ def main():
                     pass
             best_ours, best_rs = None, None
             for _ in range(args.repeat):
-                n, s = ours(args.bin, path)
-                best_ours = (n, s) if best_ours is None or s < best_ours[1] else best_ours
-                n, s = librealsense(path, best_ours[0])
-                best_rs = (n, s) if best_rs is None or s < best_rs[1] else best_rs
+                r = ours(args.bin, path)
+                best_ours = r if best_ours is None or r[1] < best_ours[1] else best_ours
+                r = librealsense(path, best_ours[0])
+                best_rs = r if best_rs is None or r[1] < best_rs[1] else best_rs
             rss = ours_peak_rss_kb(args.bin, path)
             rows.append((name, os.path.getsize(path), best_ours, best_rs, rss))
     finally:
         if not args.keep:
             shutil.rmtree(work, ignore_errors=True)
 
-    print("%-34s %9s %18s %18s %7s %10s" % ("bag", "MB", "depthbias fr/s", "librealsense fr/s",
-                                            "ratio", "peak RSS"))
-    for name, size, (n1, s1), (n2, s2), rss in rows:
+    print("%-30s %6s %17s %18s %6s %21s %9s" %
+          ("bag", "MB", "depthbias fr/s", "librealsense fr/s", "ratio", "CPU ms/frame (d / l)",
+           "peak RSS"))
+    for name, size, (n1, s1, c1), (n2, s2, c2), rss in rows:
         f1, f2 = n1 / s1, n2 / s2
-        print("%-34s %9.1f %11.1f (%3d) %11.1f (%3d) %7.2f %7.1f MB" %
-              (name, size / 1e6, f1, n1, f2, n2, f1 / f2, rss / 1024.0))
+        print("%-30s %6.1f %11.1f (%3d) %11.1f (%3d) %6.2f %10.2f / %-8.2f %6.1f MB" %
+              (name, size / 1e6, f1, n1, f2, n2, f1 / f2, 1e3 * c1 / n1, 1e3 * c2 / n2,
+               rss / 1024.0))
     print("frames/s over the whole read (open included), best of %d; (n) = frames delivered;"
           " ratio = depthbias / librealsense" % args.repeat)
-    ok = all(n1 == n2 == args.frames for _, _, (n1, _), (n2, _), _ in rows)
+    print("machine: %d cores, load average %.1f %.1f %.1f (other work slows both readers)" %
+          ((os.cpu_count() or 0,) + tuple(os.getloadavg())))
+    print("CPU ms/frame: user+system time of all the reader's threads per frame (d = depthbias,"
+          " l = librealsense with its Python callback)")
+    ok = all(n1 == n2 == args.frames for _, _, (n1, _, _), (n2, _, _), _ in rows)
     if not ok:
         print("warning: a reader did not deliver every frame", file=sys.stderr)
     return 0 if ok else 1

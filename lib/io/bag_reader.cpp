@@ -307,7 +307,9 @@ struct BagReader::Impl {
   }
 
   // Loads the next chunk at or after c->next_record. False at the end of the chunk data.
-  bool LoadNextChunk(Cursor* c) {
+  // With depth_only, skips the chunks the index says hold no depth frame (color, IMU, ...)
+  // without reading them.
+  bool LoadNextChunk(Cursor* c, bool depth_only = false) {
     while (c->next_record < data_end) {
       const std::uint64_t offset = c->next_record;
       std::uint64_t data_offset = 0;
@@ -333,6 +335,13 @@ struct BagReader::Impl {
                "truncated: ends in the middle of the record at " + At(offset));
         c->next_record = end;
         continue;
+      }
+      if (depth_only && info.indexed && has_depth && !cut) {
+        const auto counts = chunk_counts.find(offset);
+        if (counts != chunk_counts.end() && !counts->second.count(depth_conn)) {
+          c->next_record = end;
+          continue;
+        }
       }
       if (cut && !(options.allow_partial && compression == "none"))
         Fail(BagError::Kind::kTruncated,
@@ -446,10 +455,10 @@ struct BagReader::Impl {
     conns[id] = std::move(c);
   }
 
-  bool NextMessage(Cursor* c, Message* m) {
+  bool NextMessage(Cursor* c, Message* m, bool depth_only = false) {
     for (;;) {
       if (c->loaded && NextInChunk(c, m)) return true;
-      if (!LoadNextChunk(c)) return false;
+      if (!LoadNextChunk(c, depth_only)) return false;
     }
   }
 
@@ -614,6 +623,12 @@ struct BagReader::Impl {
       info.streams.push_back(s);
     }
     if (!has_depth) {
+      for (const auto& entry : stream_infos)
+        if (std::get<1>(entry.first) == "Depth")
+          Fail(BagError::Kind::kNoDepthStream,
+               "depth stream Depth_" + std::to_string(std::get<2>(entry.first)) +
+                   " of sensor " + std::to_string(std::get<0>(entry.first)) +
+                   " is declared but recorded no frames");
       std::string names;
       for (const auto& s : info.streams)
         names += (names.empty() ? "" : ", ") + s.stream_type + "_" + std::to_string(s.stream_index);
@@ -722,7 +737,7 @@ bool BagReader::Next(camera::DepthFrame* frame) {
   if (d.finished) return false;
   try {
     Impl::Message m;
-    while (d.NextMessage(&d.cursor, &m)) {
+    while (d.NextMessage(&d.cursor, &m, /*depth_only=*/true)) {
       if (m.conn != d.depth_conn) continue;
       d.DecodeDepth(m, frame);
       return true;

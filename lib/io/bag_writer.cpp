@@ -296,11 +296,12 @@ void BagWriter::Write(const camera::DepthFrame& frame) {
   RawMessage image = Typed<sensor_msgs::Image>();
   image.bytes.reserve(frame.counts.size() * 2 + 64);
   Out o(&image);
-  const double stamp_s = frame.timestamp_ms * 1e-3;
-  const double sec = std::floor(stamp_s);
+  // Device timestamp as ros::Time (seconds and nanoseconds), as librealsense stamps frames.
+  const std::uint64_t stamp_ns =
+      static_cast<std::uint64_t>(std::llround(std::max(0.0, frame.timestamp_ms) * 1e6));
   o.U32(static_cast<std::uint32_t>(frame.frame_number));
-  o.U32(static_cast<std::uint32_t>(sec));
-  o.U32(static_cast<std::uint32_t>(std::lround((stamp_s - sec) * 1e9)) % 1000000000u);
+  o.U32(static_cast<std::uint32_t>(stamp_ns / 1000000000u));
+  o.U32(static_cast<std::uint32_t>(stamp_ns % 1000000000u));
   o.Str("1");  // librealsense's marker: depth units follow the pixels
   o.U32(static_cast<std::uint32_t>(frame.height)).U32(static_cast<std::uint32_t>(frame.width));
   o.Str("mono16").U8(0).U32(static_cast<std::uint32_t>(frame.width * 2));

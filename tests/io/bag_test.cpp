@@ -228,6 +228,38 @@ TEST_P(RecordedBag, AgreesWithRosbagStorage) {
   EXPECT_FALSE(reader.Next(&frame));
 }
 
+// The same recording rewritten by rosbag_storage with one message per chunk (so most chunks hold
+// no depth frame and are skipped by the index), uncompressed and LZ4.
+TEST(RecordedBagRechunked, OneMessagePerChunkGivesTheSameFrames) {
+  TempDir dir;
+  const std::string source = FixturePath("d455_depth_color_imu.bag");
+  const Truth truth("d455_depth_color_imu.bag");
+  for (bool lz4 : {false, true}) {
+    const std::string path = dir.File(lz4 ? "rechunked_lz4.bag" : "rechunked.bag");
+    {
+      rosbag::Bag in(source, rosbag::bagmode::Read);
+      rosbag::Bag out(path, rosbag::bagmode::Write);
+      out.setChunkThreshold(1);
+      if (lz4) out.setCompression(rosbag::compression::LZ4);
+      rosbag::View view(in);
+      for (const rosbag::MessageInstance& m : view)
+        out.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
+    }
+    BagReader reader(path);
+    EXPECT_EQ(reader.info().streams.size(), 4u);
+    EXPECT_EQ(reader.info().depth_frames, truth.node["frames"].size());
+    EXPECT_EQ(reader.info().options.at("Visual_Preset"), 4.0);
+    camera::DepthFrame f;
+    std::size_t i = 0;
+    for (; reader.Next(&f); ++i) {
+      ASSERT_LT(i, truth.node["frames"].size());
+      const auto pixels = truth.node["frames"][i]["pixels"].as<std::vector<int>>();
+      EXPECT_TRUE(std::equal(pixels.begin(), pixels.end(), f.counts.begin())) << i;
+    }
+    EXPECT_EQ(i, truth.node["frames"].size()) << "lz4 " << lz4;
+  }
+}
+
 TEST(PresetName, FollowsTheD455Numbering) {
   EXPECT_EQ(PresetName(3), "HA");
   EXPECT_EQ(PresetName(4), "HD");
@@ -266,7 +298,7 @@ camera::DepthFrame TestFrame(int width, int height, int i, double units_m) {
   f.height = height;
   f.depth_units_m = units_m;
   f.frame_number = 1000 + i;
-  f.timestamp_ms = 1.7e12 + 33.36 * i;  // a wall-clock-sized device time
+  f.timestamp_ms = 5999.9999996 + 33.36 * i;  // the first rounds up to a whole second
   f.counts.resize(static_cast<std::size_t>(width) * height);
   for (int v = 0; v < height; ++v)
     for (int u = 0; u < width; ++u) f.counts[v * width + u] = Pixel(u, v, i);
@@ -521,6 +553,12 @@ TEST(BadInput, NoDepthStream) {
   } catch (const BagError& e) {
     EXPECT_NE(std::string(e.what()).find("Color_0"), std::string::npos) << e.what();
   }
+}
+
+TEST(BadInput, RecordingWithoutFrames) {
+  TempDir dir;
+  BagWriter(dir.File("empty_recording.bag"), TestConfig(64, 48, false, 0.001)).Close();
+  EXPECT_EQ(ExpectBagError(dir.File("empty_recording.bag")), Kind::kNoDepthStream);
 }
 
 TEST(BadInput, DepthStreamInAnotherEncoding) {
