@@ -58,14 +58,14 @@ def main():
         results[(model, loss)] = run(args.bin, args.path, model, loss)
     scenarios = list(ARTICLE_IN_SAMPLE)
     print("RMSE / MAE [m] per scenario: in-sample | LOTPO | LODO   (fit + both CVs: seconds)")
-    print("%-18s" % "model/loss" + "".join("%-38s" % s for s in scenarios))
+    print("%-18s" % "model/loss" + "".join("%-40s" % s for s in scenarios))
     for (model, loss), (t, sec) in results.items():
         cells = ["%.3f/%.3f | %.3f/%.3f | %.3f/%.3f" % (t[s]["rmse"], t[s]["mae"], t[s]["lotpo"],
                                                        t[s]["lotpo_mae"], t[s]["lodo"],
                                                        t[s]["lodo_mae"]) for s in scenarios]
-        print("%-18s" % (model + "/" + loss) + "".join("%-38s" % c for c in cells) +
+        print("%-18s" % (model + "/" + loss) + "".join("%-40s" % c for c in cells) +
               " %.3f s" % sec)
-    print("%-18s" % "article in-sample" + "".join("%-38s" % ("%.3f" % ARTICLE_IN_SAMPLE[s])
+    print("%-18s" % "article in-sample" + "".join("%-40s" % ("%.3f" % ARTICLE_IN_SAMPLE[s])
                                                   for s in scenarios))
     print("\nLeave-one-scenario-out choice among the forms with their default loss:")
     defaults = [c for c in candidates if c[1] == "auto"]

@@ -1,5 +1,6 @@
 #include "model/forms.h"
 
+#include <cstdio>
 #include <stdexcept>
 
 #include <ceres/jet.h>
