@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 
 namespace depthbias::sim {
 namespace {
@@ -249,7 +250,8 @@ void StereoSim::Build() {
   // Edge mixing: the other side of the nearest edge within the mixing width.
   mix_delta_px_.assign(n, 0.f);
   const int mix_w = static_cast<int>(dep.edge_mix_width_px);
-  if (mix_w > 0 && dep.edge_mix_strength > 0) {
+  mixing_ = mix_w > 0 && dep.edge_mix_strength > 0;
+  if (mixing_) {
     const std::vector<float> lo = Extreme(disparity, w, h, mix_w, false);
     const std::vector<float> hi = Extreme(disparity, w, h, mix_w, true);
     for (size_t i = 0; i < n; ++i) {
@@ -321,16 +323,17 @@ inline std::uint64_t StereoSim::PairHash(std::uint64_t counter) const {
   return Mix64(truth_.cell_seed + (counter >> 1) * kGolden);
 }
 
+template <bool kMixing>
 inline std::uint16_t StereoSim::Draw(std::uint32_t bits, int pixel, float offset_px,
                                      float sigma_px) const {
   const std::uint32_t uniform_valid = (bits >> kGaussBits) & ((1u << kValidBits) - 1);
-  const float mix = static_cast<float>(bits >> (kGaussBits + kValidBits)) *
-                    (1.0f / (1 << kMixBits));
+  [[maybe_unused]] const float mix = static_cast<float>(bits >> (kGaussBits + kValidBits)) *
+                                     (1.0f / (1 << kMixBits));
   // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½). Single
   // precision: d < 200 px is resolved to 2e-5 px, far below the 1/32 px step.
-  const float d = static_disparity_px_[pixel] + offset_px +
-                  sigma_px * gauss_[bits & ((1u << kGaussBits) - 1)] +
-                  mix * mix_delta_px_[pixel];
+  float d = static_disparity_px_[pixel] + offset_px +
+            sigma_px * gauss_[bits & ((1u << kGaussBits) - 1)];
+  if constexpr (kMixing) d += mix * mix_delta_px_[pixel];
   const float x = d * inv_step_f_ + 0.5f;
   // Valid and within [min, max] depth; counts_of_k_[0] = 0 stands for "no depth".
   const bool ok = (uniform_valid < valid_threshold_[pixel]) & (x >= k_min_f_) & (x < k_end_f_);
@@ -350,7 +353,7 @@ void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) 
   if (frame->counts.size() != n || !whole) frame->counts.assign(n, 0);
   const float offset =
       static_cast<float>(params_.departures.DisparityAtTimePx(frame_index / proto.fps));
-  auto rows = [&](int v_begin, int v_end) {
+  auto rows = [&](auto mixing, int v_begin, int v_end) {
     for (int v = v_begin; v < v_end; ++v) {
       std::uint16_t* row = frame->counts.data() +
                            static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
@@ -367,11 +370,14 @@ void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) 
           pair = c >> 1;
           hash = PairHash(c);
         }
-        row[u] = Draw(HalfOf(hash, c), base + u, offset, sigma_f_);
+        row[u] = Draw<decltype(mixing)::value>(HalfOf(hash, c), base + u, offset, sigma_f_);
       }
     }
   };
-  ForRows(window_.height, threads, rows);
+  if (mixing_)
+    ForRows(window_.height, threads, [&](int a, int b) { rows(std::true_type{}, a, b); });
+  else
+    ForRows(window_.height, threads, [&](int a, int b) { rows(std::false_type{}, a, b); });
 }
 
 void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
@@ -390,7 +396,9 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
       continue;
     }
     const std::uint64_t c = frame_base + pixels.image[i];
-    (*counts)[i] = Draw(HalfOf(PairHash(c), c), p, offset, sigma_f_);
+    const std::uint32_t bits = HalfOf(PairHash(c), c);
+    (*counts)[i] = mixing_ ? Draw<true>(bits, p, offset, sigma_f_)
+                           : Draw<false>(bits, p, offset, sigma_f_);
   }
 }
 

@@ -85,6 +85,7 @@ class StereoSim {
   void Build();
   std::uint64_t Counter(int frame_index, int pixel) const;  // the draw's index
   std::uint64_t PairHash(std::uint64_t counter) const;
+  template <bool kMixing>
   std::uint16_t Draw(std::uint32_t bits, int pixel, float offset_px, float sigma_px) const;
 
   SimParams params_;
@@ -101,6 +102,7 @@ class StereoSim {
   std::vector<std::uint16_t> counts_of_k_;  // depth counts of quantized disparity k·step
   std::vector<float> static_disparity_px_;  // true disparity + static departures; ≤ 0: no depth
   std::vector<float> mix_delta_px_;         // strength·(other side − own disparity)
+  bool mixing_ = false;                     // edge mixing on: mix_delta_px_ is used
   std::vector<std::uint16_t> valid_threshold_;  // valid if a 12-bit uniform is below it
   std::vector<float> true_depth_m_;
   std::vector<unsigned char> surface_;
