@@ -389,6 +389,7 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
                                    static_cast<std::uint64_t>(in.width) * in.height;
   const size_t n = pixels.window.size();
   counts->resize(n);
+  std::uint64_t pair = ~0ULL, hash = 0;
   for (size_t i = 0; i < n; ++i) {
     const int p = pixels.window[i];
     if (!valid_threshold_[p]) {
@@ -396,7 +397,11 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
       continue;
     }
     const std::uint64_t c = frame_base + pixels.image[i];
-    const std::uint32_t bits = HalfOf(PairHash(c), c);
+    if ((c >> 1) != pair) {  // neighbours in a row share their hash
+      pair = c >> 1;
+      hash = PairHash(c);
+    }
+    const std::uint32_t bits = HalfOf(hash, c);
     (*counts)[i] = mixing_ ? Draw<true>(bits, p, offset, sigma_f_)
                            : Draw<false>(bits, p, offset, sigma_f_);
   }
