@@ -323,22 +323,38 @@ inline std::uint64_t StereoSim::PairHash(std::uint64_t counter) const {
   return Mix64(truth_.cell_seed + (counter >> 1) * kGolden);
 }
 
+namespace {
+
+// Raw views of the static maps for the inner loops (the compiler cannot prove that the frame
+// being written does not alias the maps' vectors, so it would reload them at every pixel).
+struct Maps {
+  const float* disparity;
+  const float* mix_delta;
+  const std::uint16_t* valid_threshold;
+  const float* gauss;
+  const std::uint16_t* counts_of_k;
+  float inv_step, k_min, k_end, offset, sigma;
+};
+
 template <bool kMixing>
-inline std::uint16_t StereoSim::Draw(std::uint32_t bits, int pixel, float offset_px,
-                                     float sigma_px) const {
+inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
   const std::uint32_t uniform_valid = (bits >> kGaussBits) & ((1u << kValidBits) - 1);
-  [[maybe_unused]] const float mix = static_cast<float>(bits >> (kGaussBits + kValidBits)) *
-                                     (1.0f / (1 << kMixBits));
   // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½). Single
   // precision: d < 200 px is resolved to 2e-5 px, far below the 1/32 px step.
-  float d = static_disparity_px_[pixel] + offset_px +
-            sigma_px * gauss_[bits & ((1u << kGaussBits) - 1)];
-  if constexpr (kMixing) d += mix * mix_delta_px_[pixel];
-  const float x = d * inv_step_f_ + 0.5f;
-  // Valid and within [min, max] depth; counts_of_k_[0] = 0 stands for "no depth".
-  const bool ok = (uniform_valid < valid_threshold_[pixel]) & (x >= k_min_f_) & (x < k_end_f_);
-  return counts_of_k_[ok ? static_cast<int>(x) : 0];
+  float d = m.disparity[pixel] + m.offset + m.sigma * m.gauss[bits & ((1u << kGaussBits) - 1)];
+  if constexpr (kMixing) {
+    const float mix = static_cast<float>(bits >> (kGaussBits + kValidBits)) *
+                      (1.0f / (1 << kMixBits));
+    d += mix * m.mix_delta[pixel];
+  }
+  const float x = d * m.inv_step + 0.5f;
+  // Valid and within [min, max] depth; counts_of_k[0] = 0 stands for "no depth".
+  const bool ok =
+      (uniform_valid < m.valid_threshold[pixel]) & (x >= m.k_min) & (x < m.k_end);
+  return m.counts_of_k[ok ? static_cast<int>(x) : 0];
 }
+
+}  // namespace
 
 void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) const {
   const auto& in = params_.sensor.intrinsics;
@@ -353,15 +369,18 @@ void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) 
   if (frame->counts.size() != n || !whole) frame->counts.assign(n, 0);
   const float offset =
       static_cast<float>(params_.departures.DisparityAtTimePx(frame_index / proto.fps));
-  auto rows = [&](auto mixing, int v_begin, int v_end) {
+  const Maps maps{static_disparity_px_.data(), mix_delta_px_.data(), valid_threshold_.data(),
+                  gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
+                  sigma_f_};
+  std::uint16_t* const counts = frame->counts.data();
+  auto rows = [&, counts](auto mixing, int v_begin, int v_end) {
     for (int v = v_begin; v < v_end; ++v) {
-      std::uint16_t* row = frame->counts.data() +
-                           static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
+      std::uint16_t* row = counts + static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
       const int base = v * window_.width;
       const std::uint64_t counter = Counter(frame_index, base);
       std::uint64_t pair = ~0ULL, hash = 0;
       for (int u = 0; u < window_.width; ++u) {
-        if (!valid_threshold_[base + u]) {  // never gives depth
+        if (!maps.valid_threshold[base + u]) {  // never gives depth
           row[u] = 0;
           continue;
         }
@@ -370,7 +389,7 @@ void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) 
           pair = c >> 1;
           hash = PairHash(c);
         }
-        row[u] = Draw<decltype(mixing)::value>(HalfOf(hash, c), base + u, offset, sigma_f_);
+        row[u] = Draw<decltype(mixing)::value>(maps, HalfOf(hash, c), base + u);
       }
     }
   };
@@ -384,26 +403,31 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
                              std::vector<std::uint16_t>* counts) const {
   const float offset = static_cast<float>(
       params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
+  const Maps maps{static_disparity_px_.data(), mix_delta_px_.data(), valid_threshold_.data(),
+                  gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
+                  sigma_f_};
   const auto& in = params_.sensor.intrinsics;
   const std::uint64_t frame_base = static_cast<std::uint64_t>(frame_index) *
                                    static_cast<std::uint64_t>(in.width) * in.height;
   const size_t n = pixels.window.size();
   counts->resize(n);
+  std::uint16_t* const out = counts->data();
+  const int* const window = pixels.window.data();
+  const std::uint64_t* const image = pixels.image.data();
   std::uint64_t pair = ~0ULL, hash = 0;
   for (size_t i = 0; i < n; ++i) {
-    const int p = pixels.window[i];
-    if (!valid_threshold_[p]) {
-      (*counts)[i] = 0;
+    const int p = window[i];
+    if (!maps.valid_threshold[p]) {
+      out[i] = 0;
       continue;
     }
-    const std::uint64_t c = frame_base + pixels.image[i];
+    const std::uint64_t c = frame_base + image[i];
     if ((c >> 1) != pair) {  // neighbours in a row share their hash
       pair = c >> 1;
       hash = PairHash(c);
     }
     const std::uint32_t bits = HalfOf(hash, c);
-    (*counts)[i] = mixing_ ? Draw<true>(bits, p, offset, sigma_f_)
-                           : Draw<false>(bits, p, offset, sigma_f_);
+    out[i] = mixing_ ? Draw<true>(maps, bits, p) : Draw<false>(maps, bits, p);
   }
 }
 

@@ -85,8 +85,6 @@ class StereoSim {
   void Build();
   std::uint64_t Counter(int frame_index, int pixel) const;  // the draw's index
   std::uint64_t PairHash(std::uint64_t counter) const;
-  template <bool kMixing>
-  std::uint16_t Draw(std::uint32_t bits, int pixel, float offset_px, float sigma_px) const;
 
   SimParams params_;
   Cell cell_;
