@@ -90,7 +90,7 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     const auto emitter = info.options.find("Emitter_Enabled");
     if (preset != info.options.end()) m.preset = io::PresetName(preset->second);
     if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
-    panel::PrefetchSource ahead(&source, 4);  // read on one core, measure on the other
+    panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
     r = panel::ExtractPanel(ahead, in, params, window, box);
     if (truth && truth->preset) m.preset = *truth->preset;
     if (truth && truth->emitter) m.emitter = *truth->emitter;

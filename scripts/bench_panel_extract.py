@@ -7,6 +7,8 @@ the same file, after one read to put it in the page cache. Each runs in its own 
 peak memory (ru_maxrss from wait4) is its own.
 
   panel_extract   the whole tool: read the bag, detect the panel, measure it, write the CSV
+  BagReader       depthbias's bag reader alone (bag_info --read-all, whole process): the floor
+                  panel_extract stands on, for reference
   (a) playback    pyrealsense2 playback alone, non-real-time, every depth frame's data touched
   (b) python      pyrealsense2 playback + numpy deprojection + Open3D segment_plane twice per
                   frame (ground, then the panel in what is left); Open3D is installed here by
@@ -139,6 +141,13 @@ def main():
         wall, rss, _ = run([tool, "--quiet", "--out", out_csv, bag])
         best = min(best or (wall, rss), (wall, rss))
     rows.append(("panel_extract", args.frames, best[0], best[1]))
+    reader = os.path.join(args.bin, "bag_info")
+    if os.path.exists(reader):  # the floor: depthbias's bag reader alone, no processing
+        best = None
+        for _ in range(args.repeat):
+            wall, rss, _ = run([reader, "--read-all", bag])
+            best = min(best or (wall, rss), (wall, rss))
+        rows.append(("io::BagReader alone", args.frames, best[0], best[1]))
     best = None
     for _ in range(args.repeat):
         wall, rss, out = run([sys.executable, __file__, "--peer", "playback", "--file", bag])

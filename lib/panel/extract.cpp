@@ -1,7 +1,6 @@
 #include "panel/extract.h"
 
 #include <cmath>
-#include <deque>
 #include <iomanip>
 #include <sstream>
 #include <utility>
@@ -85,63 +84,35 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     return res;
   }
 
-  // Automatic mode, pass 1: pool frames for detection, keeping them for measurement when the
-  // detection uses only the first detection_frames of them.
-  const std::size_t frame_bytes = static_cast<std::size_t>(intrinsics.width) * intrinsics.height *
-                                  sizeof(std::uint16_t);
-  const bool cache = params.detection_frames > 0 &&
-                     params.detection_frames * static_cast<double>(frame_bytes) <=
-                         params.max_cache_mb * 1024.0 * 1024.0;
-  const std::uint64_t limit = cache ? static_cast<std::uint64_t>(params.detection_frames) : 0;
+  // Automatic mode, pass 1: pool the first detection_frames frames (every frame for 0) and find
+  // the panel. Pass 2 reads the recording again from the start to measure the region: reading
+  // the pooled frames twice costs less than keeping them (allocating their memory costs more
+  // than reading them again from the page cache).
+  const std::uint64_t limit = static_cast<std::uint64_t>(params.detection_frames);
   DepthAccumulator acc(intrinsics.width, intrinsics.height);
-  std::deque<camera::DepthFrame> cached;
-  bool more = true;
   res.passes = 1;
   while (limit == 0 || acc.frames() < limit) {
-    if (!source.Next(&frame)) {
-      more = false;
-      break;
-    }
+    if (!source.Next(&frame)) break;
     ++res.frames_read;
     if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
     acc.Add(frame);
-    if (cache) {
-      cached.emplace_back();
-      std::swap(cached.back(), frame);
-    }
   }
-  if (acc.frames() == 0) {
-    return Fail(&res, "error", "the recording holds no depth frame");
-  }
+  if (acc.frames() == 0) return Fail(&res, "error", "the recording holds no depth frame");
   res.detection = DetectPanel(rays, acc, params, window);
-  if (!res.detection.found) {
-    return Fail(&res, "no_panel", res.detection.why_not);
-  }
+  if (!res.detection.found) return Fail(&res, "no_panel", res.detection.why_not);
   res.region = RegionFromRectangle(rays, res.detection.panel, params.region_margin_px);
-  if (res.region.pixels.empty()) {
+  if (res.region.pixels.empty())
     return Fail(&res, "no_panel", "the panel's image region is empty after the margin");
-  }
 
   // Pass 2: measure the region over every frame.
+  if (!source.Rewind())
+    return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
+  res.passes = 2;
   RegionMeasurer measurer(&rays, res.region, params.baseline_m);
-  if (cache) {
-    for (const camera::DepthFrame& f : cached) measurer.Add(f);
-    cached.clear();
-    while (more && source.Next(&frame)) {
-      ++res.frames_read;
-      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
-      measurer.Add(frame);
-    }
-  } else {
-    if (!source.Rewind()) {
-      return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
-    }
-    res.passes = 2;
-    while (source.Next(&frame)) {
-      ++res.frames_read;
-      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
-      measurer.Add(frame);
-    }
+  while (source.Next(&frame)) {
+    ++res.frames_read;
+    if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
+    measurer.Add(frame);
   }
   camera::PanelMetrics& m = res.metrics;
   res.measure = measurer.Finish(res.detection.panel.center_m, &m);

@@ -21,8 +21,8 @@ class FrameSource {
  public:
   virtual ~FrameSource() = default;
   virtual bool Next(camera::DepthFrame* frame) = 0;  // false at the end
-  // Starts again from the first frame; false when the source cannot (then the extraction keeps
-  // to one pass).
+  // Starts again from the first frame; false when the source cannot. The automatic mode reads
+  // the frames twice (detect, then measure); the box mode once.
   virtual bool Rewind() { return false; }
 };
 

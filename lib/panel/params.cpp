@@ -53,7 +53,6 @@ const std::map<std::string, Setter>& Table() {
       {"baseline_m", D(&PanelParams::baseline_m)},
       {"expected_subpixel_rms_px", D(&PanelParams::expected_subpixel_rms_px)},
       {"detection_frames", I(&PanelParams::detection_frames)},
-      {"max_cache_mb", D(&PanelParams::max_cache_mb)},
       {"block_px", I(&PanelParams::block_px)},
       {"max_depth_m", D(&PanelParams::max_depth_m)},
       {"min_depth_m", D(&PanelParams::min_depth_m)},
@@ -99,7 +98,6 @@ bool PanelParams::IsValid(std::string* why) const {
   if (!(baseline_m > 0)) return fail("baseline_m must be positive");
   if (!(expected_subpixel_rms_px > 0)) return fail("expected_subpixel_rms_px must be positive");
   if (detection_frames < 0) return fail("detection_frames must be 0 (all) or positive");
-  if (!(max_cache_mb >= 0)) return fail("max_cache_mb must not be negative");
   if (block_px < 0 || block_px > 64) return fail("block_px must be in 0..64");
   if (!(min_depth_m >= 0 && max_depth_m > min_depth_m))
     return fail("need 0 <= min_depth_m < max_depth_m");

@@ -19,11 +19,9 @@ struct PanelParams {
   double baseline_m = 0.095;               // stereo baseline B (D455)
   double expected_subpixel_rms_px = 0.08;  // disparity noise σ_d used for inlier thresholds
 
-  // Accumulation: frames of the static scene pooled for detection. The first
-  // detection_frames frames are kept in memory so one pass over the recording suffices;
-  // 0 pools every frame and reads the recording twice (pass 1 detect, pass 2 measure).
+  // Accumulation: the first detection_frames frames of the static scene are pooled for
+  // detection (0: every frame); then the recording is read again from the start to measure.
   int detection_frames = 30;
-  double max_cache_mb = 256.0;  // memory allowed for those cached frames
 
   // Detection cloud: the accumulated depth image binned into blocks of block_px × block_px;
   // 0 picks width / 320 (4 at 1280×720).

@@ -122,8 +122,9 @@ TEST(PanelDetect, SparsePanelIsFoundFromPooledFrames) {
   ASSERT_TRUE(r.detection.found) << r.detection.why_not;
   EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
   EXPECT_NEAR(r.metrics.hole_rate_pct, 99.0, 1.0);
-  EXPECT_EQ(r.passes, 1);
-  EXPECT_EQ(src.rewinds, 0);
+  EXPECT_EQ(r.passes, 2);  // pooled for detection, then read again to measure
+  EXPECT_EQ(src.rewinds, 1);
+  EXPECT_EQ(r.frames_read, 60u);
 }
 
 // detection_frames = 0 pools every frame and measures in a second pass over the source.
