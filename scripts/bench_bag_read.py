@@ -2,11 +2,14 @@
 """Benchmark: frames per second reading every depth frame of a 300-frame 1280x720 bag,
 uncompressed and LZ4-compressed, with depthbias's BagReader (bag_info --read-all) and with
 librealsense's own playback (pyrealsense2, non-real-time), side by side on the same files.
+Both read through rosbag: BagReader through Debian's rosbag_storage (and its roslz4 for LZ4
+chunks), librealsense through the copy of rosbag it bundles.
 
 The bags are recorded by librealsense's recorder from a software device (a noisy plane with
 holes, like a real depth image), so both readers see the layout the camera writes. Each reader
 runs REPEAT times on a warm page cache; the best run counts. Also prints the peak resident memory
-of bag_info reading the whole bag (it should not grow with the bag's length).
+of bag_info reading the whole bag (it holds one chunk and rosbag's index, a few tens of bytes
+per message, so it grows only slowly with the bag's length).
 
 Usage: scripts/bench_bag_read.py [--bin build/apps] [--frames 300] [--repeat 5] [--keep DIR]
 """

@@ -10,7 +10,7 @@ DEB_PACKAGES=(
   libgtest-dev libgmock-dev
   librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev pluginlib-dev
   libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
-  liblz4-dev libbz2-dev
+  libroslz4-dev libbz2-dev
   libusb-1.0-0 python3 python3-pip
 )
 # pyrealsense2 2.56.5 is the last release whose recorder writes ROS1 .bag files.

@@ -1,7 +1,13 @@
 #pragma once
 // RealSense ROS1 bag layout (as librealsense's recorder writes it): reading the depth stream,
 // its intrinsics, depth units, recorded options and device info; and writing the same layout.
-// Frames are streamed one at a time so memory stays flat however long the bag.
+// Both go through Debian's rosbag_storage. The reader opens the bag with rosbag::Bag, reads the
+// metadata topics and then the depth frames through rosbag::View, one frame at a time (memory
+// holds rosbag's small per-message index and one chunk, however long the bag), and decodes the
+// messages with roscpp_serialization, including the depth units librealsense appends to each
+// image. Before rosbag sees a file, a structural check of its records (no decompression) turns
+// damage rosbag would not survive into a BagError; the only reads that do not go through rosbag
+// are partial reads of a bag rosbag cannot open (see ReadOptions).
 
 #include <cstdint>
 #include <map>
@@ -78,8 +84,10 @@ struct BagInfo {
 std::string PresetName(double visual_preset);
 
 struct ReadOptions {
-  // On damage, stop at the last good frame instead of throwing. A bag without its index (cut
-  // short, or never closed) is then opened by scanning its chunks, and info().indexed is false.
+  // On damage, stop at the last good frame instead of throwing. A bag rosbag cannot open (no
+  // index because it was cut short or never closed, or damage found by the structural check) is
+  // then read by scanning its chunks in file order up to the damage, without rosbag;
+  // info().indexed is false and damage() says what was wrong.
   bool allow_partial = false;
 };
 

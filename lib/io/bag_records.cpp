@@ -1,5 +1,13 @@
 #include "io/bag_records.h"
 
+#include <ros/serialization.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <std_msgs/Float32.h>
+#include <std_msgs/Header.h>
+#include <std_msgs/String.h>
+
+#include <climits>
+#include <cstdint>
 #include <cstring>
 
 namespace depthbias::io::bag_detail {
@@ -9,11 +17,6 @@ void ByteReader::Need(std::size_t count) const {
     throw FormatError("needs " + std::to_string(count) + " bytes at offset " +
                       std::to_string(pos_) + " of a " + std::to_string(size_) + "-byte field");
   }
-}
-
-std::uint8_t ByteReader::U8() {
-  Need(1);
-  return data_[pos_++];
 }
 
 std::uint32_t ByteReader::U32() {
@@ -30,26 +33,6 @@ std::uint64_t ByteReader::U64() {
   for (int i = 7; i >= 0; --i) v = (v << 8) | data_[pos_ + i];
   pos_ += 8;
   return v;
-}
-
-float ByteReader::F32() {
-  const std::uint32_t bits = U32();
-  float v;
-  std::memcpy(&v, &bits, sizeof v);
-  return v;
-}
-
-double ByteReader::F64() {
-  const std::uint64_t bits = U64();
-  double v;
-  std::memcpy(&v, &bits, sizeof v);
-  return v;
-}
-
-std::string ByteReader::String() {
-  const std::uint32_t n = U32();
-  const std::uint8_t* p = Bytes(n);
-  return std::string(reinterpret_cast<const char*>(p), n);
 }
 
 const std::uint8_t* ByteReader::Bytes(std::size_t count) {
@@ -109,14 +92,25 @@ std::string RecordHeader::Str(std::string_view name) const { return std::string(
 
 namespace {
 
-// std_msgs/Header: seq, stamp (sec, nsec), frame_id.
-void ReadHeader(ByteReader* r, std::uint32_t* seq, double* stamp_ms, std::string* frame_id) {
-  *seq = r->U32();
-  const std::uint32_t sec = r->U32();
-  const std::uint32_t nsec = r->U32();
-  *stamp_ms = StampMs(sec, nsec);
-  const std::string id = r->String();
-  if (frame_id) *frame_id = id;
+namespace ser = ros::serialization;
+
+// A roscpp_serialization input stream over serialized bytes; overruns throw FormatError.
+ser::IStream Stream(const std::uint8_t* data, std::size_t size) {
+  if (size > UINT32_MAX) throw FormatError("message of " + std::to_string(size) + " bytes");
+  return ser::IStream(const_cast<std::uint8_t*>(data), static_cast<std::uint32_t>(size));
+}
+
+template <typename F>
+auto Checked(const char* what, F&& decode) {
+  try {
+    return decode();
+  } catch (const ser::StreamOverrunException&) {
+    throw FormatError(std::string(what) + " ends before its fields do");
+  }
+}
+
+double StampMs(const ros::Time& t) {
+  return static_cast<double>(t.sec) * 1e3 + static_cast<double>(t.nsec) * 1e-6;
 }
 
 int ParseIndexedName(const std::string& s, const std::string& prefix) {
@@ -134,51 +128,107 @@ int ParseIndexedName(const std::string& s, const std::string& prefix) {
 }  // namespace
 
 ImageView DecodeImage(const std::uint8_t* data, std::size_t size) {
-  ByteReader r(data, size);
-  ImageView m;
-  ReadHeader(&r, &m.seq, &m.stamp_ms, &m.frame_id);
-  m.height = r.U32();
-  m.width = r.U32();
-  m.encoding = r.String();
-  m.big_endian = r.U8() != 0;
-  m.step = r.U32();
-  m.data_size = r.U32();
-  m.data = r.Bytes(m.data_size);
-  if (m.frame_id == "1" && r.remaining() >= 4) {
-    m.has_depth_units = true;
-    m.depth_units = r.F32();
-  }
-  return m;
+  return Checked("image message", [&] {
+    ser::IStream s = Stream(data, size);
+    ImageView m;
+    std_msgs::Header header;
+    s.next(header);
+    m.seq = header.seq;
+    m.stamp_ms = StampMs(header.stamp);
+    m.frame_id = header.frame_id;
+    std::uint8_t big_endian = 0;
+    s.next(m.height);
+    s.next(m.width);
+    s.next(m.encoding);
+    s.next(big_endian);
+    m.big_endian = big_endian != 0;
+    s.next(m.step);
+    s.next(m.data_size);
+    m.data = s.advance(m.data_size);  // the pixels stay where they are
+    // librealsense's extended header: the frame's depth units after the image data.
+    if (m.frame_id == "1" && s.getLength() >= 4) {
+      m.has_depth_units = true;
+      s.next(m.depth_units);
+    }
+    return m;
+  });
 }
 
 void DecodeStamp(const std::uint8_t* data, std::size_t size, std::uint32_t* seq,
                  double* stamp_ms) {
-  ByteReader r(data, size);
-  ReadHeader(&r, seq, stamp_ms, nullptr);
+  Checked("message header", [&] {
+    ser::IStream s = Stream(data, size);
+    std_msgs::Header header;
+    s.next(header);
+    *seq = header.seq;
+    *stamp_ms = StampMs(header.stamp);
+    return 0;
+  });
 }
 
 CameraInfoView DecodeCameraInfo(const std::uint8_t* data, std::size_t size) {
-  ByteReader r(data, size);
-  CameraInfoView m;
-  std::uint32_t seq;
-  double stamp;
-  ReadHeader(&r, &seq, &stamp, nullptr);
-  m.height = r.U32();
-  m.width = r.U32();
-  m.distortion_model = r.String();
-  const std::uint32_t nd = r.U32();
-  if (nd > 64) throw FormatError("camera_info has " + std::to_string(nd) + " coefficients");
-  for (std::uint32_t i = 0; i < nd; ++i) m.d.push_back(r.F64());
-  for (double& k : m.k) k = r.F64();
-  return m;
+  return Checked("camera_info message", [&] {
+    // roscpp_serialization sizes D before it checks the bytes are there: check first.
+    ser::IStream peek = Stream(data, size);
+    std_msgs::Header header;
+    std::uint32_t u32 = 0;
+    std::string model;
+    peek.next(header);
+    peek.next(u32);
+    peek.next(u32);
+    peek.next(model);
+    peek.next(u32);
+    if (u32 > peek.getLength() / 8)
+      throw FormatError("camera_info claims " + std::to_string(u32) + " distortion coefficients");
+    ser::IStream s = Stream(data, size);
+    sensor_msgs::CameraInfo info;
+    s.next(info);
+    CameraInfoView m;
+    m.height = info.height;
+    m.width = info.width;
+    m.distortion_model = info.distortion_model;
+    m.d = info.D;
+    for (int i = 0; i < 9; ++i) m.k[i] = info.K[i];
+    return m;
+  });
 }
 
 StreamInfoView DecodeStreamInfo(const std::uint8_t* data, std::size_t size) {
-  ByteReader r(data, size);
-  StreamInfoView m;
-  m.fps = r.U32();
-  m.encoding = r.String();
-  return m;
+  return Checked("stream info message", [&] {
+    ser::IStream s = Stream(data, size);
+    StreamInfoView m;
+    s.next(m.fps);
+    s.next(m.encoding);
+    return m;
+  });
+}
+
+void DecodeKeyValue(const std::uint8_t* data, std::size_t size, std::string* key,
+                    std::string* value) {
+  Checked("key/value message", [&] {
+    ser::IStream s = Stream(data, size);
+    s.next(*key);
+    s.next(*value);
+    return 0;
+  });
+}
+
+float DecodeFloat32(const std::uint8_t* data, std::size_t size) {
+  return Checked("float32 message", [&] {
+    ser::IStream s = Stream(data, size);
+    std_msgs::Float32 m;
+    s.next(m);
+    return m.data;
+  });
+}
+
+std::string DecodeString(const std::uint8_t* data, std::size_t size) {
+  return Checked("string message", [&] {
+    ser::IStream s = Stream(data, size);
+    std_msgs::String m;
+    s.next(m);
+    return m.data;
+  });
 }
 
 TopicParts ParseTopic(const std::string& topic) {

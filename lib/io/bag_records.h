@@ -1,14 +1,17 @@
 #pragma once
-// Private to io: the ROS1 bag v2.0 record layout (http://wiki.ros.org/Bags/Format/2.0) and the
-// few message encodings a RealSense recording uses, decoded with bounds checks so that damaged
-// input throws FormatError instead of reading past a buffer.
+// Private to io. Two things rosbag_storage does not give the reader:
+// - the ROS1 bag v2.0 record layout (http://wiki.ros.org/Bags/Format/2.0) read with bounds
+//   checks, for the structural check made before a file is handed to rosbag::Bag and for reading
+//   the frames before the damage of a bag rosbag cannot open (partial reads);
+// - decoding of the messages a RealSense recording holds from their serialized bytes, with
+//   roscpp_serialization, shared by the rosbag path and the partial path.
+// Damaged input throws FormatError instead of reading past a buffer or allocating without bound.
 
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <utility>
 #include <vector>
 
 namespace depthbias::io::bag_detail {
@@ -35,16 +38,10 @@ class ByteReader {
 
   std::size_t remaining() const { return size_ - pos_; }
   std::size_t pos() const { return pos_; }
-  const std::uint8_t* here() const { return data_ + pos_; }
 
-  std::uint8_t U8();
   std::uint32_t U32();
   std::uint64_t U64();
-  float F32();
-  double F64();
-  std::string String();                         // u32 length + bytes
   const std::uint8_t* Bytes(std::size_t count);  // pointer to count bytes, then skips them
-  void Skip(std::size_t count) { Bytes(count); }
 
  private:
   void Need(std::size_t count) const;
@@ -74,11 +71,6 @@ class RecordHeader {
   std::vector<Span> fields_;
 };
 
-// ros::Time as stored in bags and message headers: seconds and nanoseconds.
-inline double StampMs(std::uint32_t sec, std::uint32_t nsec) {
-  return static_cast<double>(sec) * 1e3 + static_cast<double>(nsec) * 1e-6;
-}
-
 // sensor_msgs/Image as librealsense writes it. When header.frame_id is "1" (librealsense's
 // marker of its extended header), a float32 with the frame's depth units follows the data.
 struct ImageView {
@@ -90,14 +82,14 @@ struct ImageView {
   std::string encoding;
   bool big_endian = false;
   std::uint32_t step = 0;
-  const std::uint8_t* data = nullptr;
+  const std::uint8_t* data = nullptr;  // points into the serialized bytes
   std::uint32_t data_size = 0;
   bool has_depth_units = false;
   float depth_units = 0.0f;
 };
 ImageView DecodeImage(const std::uint8_t* data, std::size_t size);  // throws FormatError
 
-// The header part only: seq and stamp.
+// The std_msgs/Header part only: seq and stamp.
 void DecodeStamp(const std::uint8_t* data, std::size_t size, std::uint32_t* seq, double* stamp_ms);
 
 // sensor_msgs/CameraInfo fields the reader needs.
@@ -116,6 +108,13 @@ struct StreamInfoView {
   std::string encoding;
 };
 StreamInfoView DecodeStreamInfo(const std::uint8_t* data, std::size_t size);
+
+// diagnostic_msgs/KeyValue (device and sensor info), std_msgs/Float32 (option values) and
+// std_msgs/String (option descriptions).
+void DecodeKeyValue(const std::uint8_t* data, std::size_t size, std::string* key,
+                    std::string* value);
+float DecodeFloat32(const std::uint8_t* data, std::size_t size);
+std::string DecodeString(const std::uint8_t* data, std::size_t size);
 
 // Parts of a RealSense topic /device_<d>/sensor_<s>/<Type>_<i>/<rest>, or of
 // /device_<d>/sensor_<s>/option/<Name>/<rest>. Missing parts are -1 / empty.

@@ -575,6 +575,67 @@ TEST(BadInput, DepthStreamInAnotherEncoding) {
   EXPECT_EQ(ExpectBagError(dir.File("frames.bag")), Kind::kBadEncoding);
 }
 
+// Positions of the message offsets in the index data records after each chunk (entries of 12
+// bytes: sec, nsec, offset of the message in the chunk).
+std::vector<std::size_t> IndexDataOffsets(const std::string& bytes) {
+  auto u32 = [&](std::size_t p) {
+    std::uint32_t v;
+    std::memcpy(&v, bytes.data() + p, 4);
+    return v;
+  };
+  std::vector<std::size_t> at;
+  std::size_t pos = 13;  // after "#ROSBAG V2.0\n"
+  while (pos + 8 <= bytes.size()) {
+    const std::uint32_t header = u32(pos);
+    const std::size_t data_at = pos + 8 + header;
+    const std::uint32_t data = u32(pos + 4 + header);
+    if (bytes.substr(pos + 4, header).find(std::string("op=\x04", 4)) != std::string::npos)
+      for (std::size_t k = 0; k + 12 <= data; k += 12) at.push_back(data_at + k + 8);
+    pos = data_at + data;
+  }
+  return at;
+}
+
+// rosbag reads each message at the offset the index data gives, without checking it. The check
+// made before rosbag opens the bag finds a damaged offset: in an uncompressed chunk any offset
+// that is not the indexed message's record; in a compressed chunk (which it does not decompress)
+// only an offset outside the chunk.
+TEST(BadInput, DamagedMessageOffsetsInTheIndex) {
+  TempDir dir;
+  const std::string path = dir.File("offsets.bag");
+  for (const char* name : {"d455_depth_1mm.bag", "d455_depth_100um_lz4.bag"}) {
+    const bool lz4 = std::string(name).find("lz4") != std::string::npos;
+    const std::string original = ReadBytes(FixturePath(name));
+    const std::vector<std::size_t> offsets = IndexDataOffsets(original);
+    ASSERT_GT(offsets.size(), 10u) << name;
+    int runs = 0, errors = 0;
+    const std::vector<std::int64_t> deltas =
+        lz4 ? std::vector<std::int64_t>{1 << 20, 1ll << 31}
+            : std::vector<std::int64_t>{1, 3, -1, 1 << 20};
+    for (std::size_t at : offsets) {
+      for (std::int64_t delta : deltas) {
+        std::string bytes = original;
+        std::uint32_t v;
+        std::memcpy(&v, &bytes[at], 4);
+        v = static_cast<std::uint32_t>(static_cast<std::int64_t>(v) + delta);
+        std::memcpy(&bytes[at], &v, 4);
+        WriteBytes(path, bytes);
+        ++runs;
+        try {
+          BagReader reader(path);
+          camera::DepthFrame f;
+          while (reader.Next(&f)) {
+          }
+        } catch (const BagError& e) {
+          ++errors;
+          EXPECT_EQ(e.kind(), Kind::kCorrupt) << e.what();
+        }
+      }
+    }
+    EXPECT_EQ(errors, runs) << name;
+  }
+}
+
 // Random damage to real bags: every outcome is frames or a BagError, never a crash or a hang.
 TEST(BadInput, RandomDamageNeverCrashes) {
   TempDir dir;
