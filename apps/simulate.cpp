@@ -1,0 +1,185 @@
+// simulate: the simulated D455 on a protocol (lib/sim). Three uses:
+//   simulate --protocol P --out-dir DIR [--frames N] [--seed S] [--effects F] [--sensor F]
+//       one RealSense-layout bag per recording + DIR/manifest.csv (with the true panel depth,
+//       range, angle and hole rate)
+//   simulate --protocol P --metrics-only --out metrics.csv [...]   the fast metrics-only path
+//   simulate --protocol P --calibrate-to real.csv --out sensor.yaml [...]   fit σ_d and holes
+// --sensor F (or "builtin") overrides the protocol's sensor file; --margin-px M the region margin;
+// --threads N recordings evaluated in parallel by the metrics-only path (default: all cores).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <future>
+#include <iostream>
+#include <string>
+#include <thread>
+
+#include "io/atomic_file.h"
+#include "io/bag.h"
+#include "io/manifest.h"
+#include "io/metrics_csv.h"
+#include "sim/calibrate.h"
+#include "sim/config_yaml.h"
+
+namespace {
+
+using namespace depthbias;
+namespace fs = std::filesystem;
+
+struct Fail : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// A flag's number: whole numbers >= min_value when whole, else any finite number.
+double Parse(const std::string& flag, const std::string& text, bool whole, double min_value) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v) || v < min_value ||
+      (whole && v != std::floor(v)))
+    throw Fail(flag + " '" + text + "' is not a " + (whole ? "whole " : "") + "number >= " +
+               std::to_string(static_cast<long long>(min_value)));
+  return v;
+}
+
+std::string Fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
+                     const std::string& dir) {
+  fs::create_directories(dir);
+  std::vector<io::ManifestRow> rows;
+  for (const sim::Cell& cell : sim::MakeCells(params.protocol)) {
+    const sim::StereoSim simulator(params, cell, 2);
+    io::BagWriterConfig config;
+    config.intrinsics = params.sensor.intrinsics;
+    config.depth_units_m = params.sensor.depth_units_m;
+    config.fps = params.protocol.fps;
+    sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
+    config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
+    config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
+    config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
+    const std::string bag = cell.name + ".bag";
+    io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
+    // Frame k + 1 is rendered while frame k is written.
+    camera::DepthFrame frames[2];
+    simulator.Render(0, &frames[0], 2);
+    for (int k = 0; k < params.protocol.frames; ++k) {
+      std::future<void> next;
+      if (k + 1 < params.protocol.frames)
+        next = std::async(std::launch::async,
+                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2], 2); });
+      writer.Write(frames[k % 2]);
+      if (next.valid()) next.get();
+    }
+    writer.Close();
+    const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell, metrics);
+    io::ManifestRow row;
+    row.bag = bag;
+    row.distance_m = cell.distance_m;
+    row.angle_deg = cell.angle_deg;
+    row.light = cell.light;
+    row.preset = cell.preset;
+    row.emitter = cell.emitter_on ? "on" : "off";
+    row.extras = {{"true_depth_m", Fixed(truth.truth.panel_depth_m, 6)},
+                  {"true_range_m", Fixed(truth.truth.panel_range_m, 6)},
+                  {"true_angle_deg", Fixed(truth.truth.panel_angle_deg, 4)},
+                  {"true_hole_rate_pct", Fixed(truth.metrics.hole_rate_pct, 3)}};
+    rows.push_back(row);
+  }
+  io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
+                    {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
+  std::printf("simulate: %zu recordings of %d frames in %s\n", rows.size(),
+              params.protocol.frames, dir.c_str());
+}
+
+void Calibrate(const sim::SimParams& params, const std::string& real_csv,
+               const std::string& out, const sim::MetricsParams& metrics) {
+  sim::CalibrateParams cp;
+  cp.metrics = metrics;
+  const sim::CalibrationResult r =
+      sim::CalibrateSensor(params, io::ReadMetricsCsv(real_csv), cp);
+  if (!r.success) throw Fail(real_csv + ": calibration failed: " + r.message);
+  std::fputs(sim::FormatCalibration(r).c_str(), stdout);
+  io::WriteFileAtomic(
+      out, sim::FormatSensorYaml(
+               r.sensor,
+               {"D455 base sensor calibrated by simulate --calibrate-to " +
+                    io::BaseName(real_csv) + " (per scenario: sigma_d_px, invalid_prob)",
+                "fitted to plane_std_m (relative) and valid_pct over every recording"},
+               sim::CalibrationYaml(r, io::BaseName(real_csv))));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string protocol_file, sensor_file, effects_file, out_dir, out, calibrate_to;
+  bool metrics_only = false;
+  int frames = 0;
+  sim::MetricsParams mp;
+  mp.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  sim::SimParams params;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw Fail(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--protocol") protocol_file = value();
+      else if (a == "--sensor") sensor_file = value();
+      else if (a == "--effects") effects_file = value();
+      else if (a == "--out-dir") out_dir = value();
+      else if (a == "--out") out = value();
+      else if (a == "--calibrate-to") calibrate_to = value();
+      else if (a == "--metrics-only") metrics_only = true;
+      else if (a == "--frames") frames = static_cast<int>(Parse(a, value(), true, 1));
+      else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Parse(a, value(), true, 0));
+      else if (a == "--margin-px") mp.region_margin_px = Parse(a, value(), false, 0);
+      else if (a == "--threads") mp.threads = static_cast<int>(Parse(a, value(), true, 1));
+      else throw Fail("unknown argument '" + a + "' (see the header of apps/simulate.cpp)");
+    }
+    if (protocol_file.empty()) throw Fail("--protocol FILE is required");
+    if ((out_dir.empty() ? 0 : 1) + metrics_only + !calibrate_to.empty() != 1)
+      throw Fail("choose one of --out-dir DIR, --metrics-only, --calibrate-to real.csv");
+    if ((metrics_only || !calibrate_to.empty()) && out.empty()) throw Fail("--out is required");
+    std::string why, named_sensor;
+    if (!sim::ParseProtocolYaml(io::ReadFile(protocol_file), &params.protocol, &named_sensor,
+                                &why))
+      throw Fail(protocol_file + ": " + why);
+    if (sensor_file.empty() && !named_sensor.empty())
+      sensor_file = (fs::path(protocol_file).parent_path() / named_sensor).string();
+    if (!sensor_file.empty() && sensor_file != "builtin" &&
+        !sim::ParseSensorYaml(io::ReadFile(sensor_file), &params.sensor, &why))
+      throw Fail(sensor_file + ": " + why);
+    if (!effects_file.empty()) {
+      std::vector<sim::EffectSpec> effects;
+      if (!sim::ParseEffectsYaml(io::ReadFile(effects_file), &effects, &why) ||
+          !sim::BuildDepartures(effects, &params.departures, &why))
+        throw Fail(effects_file + ": " + why);
+    }
+    if (frames != 0) params.protocol.frames = frames;
+    if (!params.IsValid(&why) || !mp.IsValid(&why)) throw Fail(why);
+
+    if (!out_dir.empty()) {
+      WriteRecordings(params, mp, out_dir);
+    } else if (metrics_only) {
+      std::vector<camera::PanelMetrics> rows;
+      for (const auto& r : sim::SimulateProtocolMetrics(params, mp)) rows.push_back(r.metrics);
+      io::WriteMetricsCsv(out, rows);
+    } else {
+      Calibrate(params, calibrate_to, out, mp);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "simulate: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,203 @@
+#include "sim/scene.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+namespace depthbias::sim {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+bool Fail(std::string* why, const std::string& message) {
+  if (why) *why = message;
+  return false;
+}
+
+std::string Number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// Horizontal distance of the panel centre from the camera for a nominal distance meant as
+// range or as depth.
+double HorizontalDistance(const SceneParams& scene, const Eigen::Matrix3d& level_from_camera,
+                          DistanceIs meaning, double distance_m, double angle_rad) {
+  const double drop_m = scene.camera_height_m - scene.panel_center_height_m;  // + below
+  if (meaning == DistanceIs::kRange) {
+    // |(h sinα, drop, h cosα)| = D.
+    return std::sqrt(std::max(distance_m * distance_m - drop_m * drop_m, 0.0));
+  }
+  // Depth: the camera-frame z of p = (h sinα, drop, h cosα) equals D, with
+  // z_camera = r·p where r is the camera's optical axis in the level frame.
+  const Eigen::Vector3d axis = level_from_camera.col(2);
+  const double per_h = axis.x() * std::sin(angle_rad) + axis.z() * std::cos(angle_rad);
+  return (distance_m - axis.y() * drop_m) / per_h;
+}
+
+}  // namespace
+
+std::string DistanceIsName(DistanceIs d) { return d == DistanceIs::kRange ? "range" : "depth"; }
+
+bool ParseDistanceIs(const std::string& name, DistanceIs* d) {
+  if (name == "range") {
+    *d = DistanceIs::kRange;
+  } else if (name == "depth") {
+    *d = DistanceIs::kDepth;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+bool SceneParams::IsValid(std::string* why) const {
+  if (!(camera_height_m > 0)) return Fail(why, "camera_height_m must be > 0");
+  if (!(std::fabs(camera_pitch_deg) < 80))
+    return Fail(why, "camera_pitch_deg must be in (-80, 80)");
+  if (!(std::fabs(camera_roll_deg) < 80)) return Fail(why, "camera_roll_deg must be in (-80, 80)");
+  if (!(panel_width_m > 0) || !(panel_height_m > 0))
+    return Fail(why, "panel_width_m and panel_height_m must be > 0");
+  if (!(panel_center_height_m >= 0)) return Fail(why, "panel_center_height_m must be >= 0");
+  if (!(std::fabs(panel_yaw_deg) < 89)) return Fail(why, "panel_yaw_deg must be in (-89, 89)");
+  if (!(background_distance_m > 0)) return Fail(why, "background_distance_m must be > 0");
+  for (double t : {ground_texture, panel_texture, background_texture})
+    if (!(t >= 0 && t <= 1)) return Fail(why, "textures must be in [0, 1]");
+  return true;
+}
+
+bool ProtocolParams::IsValid(std::string* why) const {
+  if (distances_m.empty() || angles_deg.empty() || presets.empty() || emitters.empty() ||
+      lights.empty())
+    return Fail(why, "distances_m, angles_deg, presets, emitters and lights must not be empty");
+  for (double d : distances_m)
+    if (!(d > 0) || !std::isfinite(d)) return Fail(why, "distances_m must be > 0");
+  for (double a : angles_deg)
+    if (!(std::fabs(a) < 60)) return Fail(why, "angles_deg must be in (-60, 60)");
+  for (const auto& p : presets) {
+    double v;
+    if (!PresetOptionValue(p, &v)) return Fail(why, "unknown preset '" + p + "' (HA or HD)");
+  }
+  if (frames < 1) return Fail(why, "frames must be >= 1");
+  if (!(fps > 0)) return Fail(why, "fps must be > 0");
+  return scene.IsValid(why);
+}
+
+std::string CellName(const Cell& c) {
+  return "sim_" + c.light + "_emitter-" + (c.emitter_on ? "on" : "off") + "_" +
+         Number(c.distance_m) + "m_" + Number(c.angle_deg) + "deg_" + c.preset;
+}
+
+std::vector<Cell> MakeCells(const ProtocolParams& p) {
+  std::vector<Cell> cells;
+  for (const auto& light : p.lights)
+    for (bool emitter : p.emitters)
+      for (double angle : p.angles_deg)
+        for (const auto& preset : p.presets)
+          for (double distance : p.distances_m) {
+            Cell c;
+            c.distance_m = distance;
+            c.angle_deg = angle;
+            c.preset = preset;
+            c.emitter_on = emitter;
+            c.light = light;
+            c.name = CellName(c);
+            cells.push_back(c);
+          }
+  return cells;
+}
+
+bool PresetOptionValue(const std::string& preset, double* value) {
+  if (preset == "HA") {
+    *value = 3;
+  } else if (preset == "HD") {
+    *value = 4;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+Eigen::Matrix3d LevelFromCamera(const SceneParams& scene) {
+  // Pitch down by p: the optical axis becomes (0, sin p, cos p) in the level frame, a rotation
+  // about x by −p; roll about the optical axis comes first.
+  return (Eigen::AngleAxisd(-scene.camera_pitch_deg * kDegToRad, Eigen::Vector3d::UnitX()) *
+          Eigen::AngleAxisd(scene.camera_roll_deg * kDegToRad, Eigen::Vector3d::UnitZ()))
+      .toRotationMatrix();
+}
+
+PanelPose PlacePanel(const SceneParams& scene, DistanceIs distance_is, const Cell& cell,
+                     double range_vs_depth_weight, double extra_yaw_deg) {
+  const Eigen::Matrix3d r = LevelFromCamera(scene);
+  const double a = cell.angle_deg * kDegToRad;
+  const DistanceIs other = distance_is == DistanceIs::kRange ? DistanceIs::kDepth
+                                                             : DistanceIs::kRange;
+  const double h_nominal = HorizontalDistance(scene, r, distance_is, cell.distance_m, a);
+  const double h_other = HorizontalDistance(scene, r, other, cell.distance_m, a);
+  const double h = h_nominal + range_vs_depth_weight * (h_other - h_nominal);
+  const double drop_m = scene.camera_height_m - scene.panel_center_height_m;
+  const Eigen::Vector3d center_level(h * std::sin(a), drop_m, h * std::cos(a));
+
+  // The panel stands vertical, facing back along the camera's horizontal viewing direction
+  // (parallel to the image plane when pitch and roll are 0), then turned by its yaw.
+  Eigen::Vector3d forward = r.col(2);
+  forward.y() = 0;
+  forward.normalize();
+  const double yaw = (scene.panel_yaw_deg + extra_yaw_deg) * kDegToRad;
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Vector3d normal_level = turn * (-forward);
+  const Eigen::Vector3d width_level = turn * Eigen::Vector3d(forward.z(), 0, -forward.x());
+
+  PanelPose pose;
+  const Eigen::Matrix3d camera_from_level = r.transpose();
+  pose.center_m = camera_from_level * center_level;
+  pose.normal = camera_from_level * normal_level;
+  pose.axis_width = camera_from_level * width_level;
+  pose.axis_height = camera_from_level * Eigen::Vector3d::UnitY();
+  pose.width_m = scene.panel_width_m;
+  pose.height_m = scene.panel_height_m;
+  return pose;
+}
+
+RayCaster::RayCaster(const SceneParams& scene, const PanelPose& panel)
+    : scene_(scene), panel_(panel), level_from_camera_(LevelFromCamera(scene)) {
+  panel_offset_ = panel_.normal.dot(panel_.center_m);
+}
+
+Hit RayCaster::Cast(double xn, double yn) const {
+  // The ray p(t) = t·(xn, yn, 1) in the camera frame: t is the depth Z of the point. Plain
+  // scalars: this runs once per pixel and recording.
+  const Eigen::Vector3d& n = panel_.normal;
+  const Eigen::Vector3d& c = panel_.center_m;
+  const Eigen::Vector3d& aw = panel_.axis_width;
+  const Eigen::Vector3d& ah = panel_.axis_height;
+  const Eigen::Matrix3d& r = level_from_camera_;
+  Hit best;
+  auto take = [&](double t, Surface s, double texture) {
+    if (t > 0 && std::isfinite(t) && (best.surface == Surface::kNone || t < best.depth_m)) {
+      best.depth_m = t;
+      best.surface = s;
+      best.texture = texture;
+    }
+  };
+  // Panel: n·(t·ray) = n·c, inside the rectangle.
+  const double denom = n.x() * xn + n.y() * yn + n.z();
+  if (std::fabs(denom) > 1e-12) {
+    const double t = panel_offset_ / denom;
+    const double qx = t * xn - c.x(), qy = t * yn - c.y(), qz = t - c.z();
+    if (std::fabs(qx * aw.x() + qy * aw.y() + qz * aw.z()) <= 0.5 * panel_.width_m &&
+        std::fabs(qx * ah.x() + qy * ah.y() + qz * ah.z()) <= 0.5 * panel_.height_m)
+      take(t, Surface::kPanel, scene_.panel_texture);
+  }
+  // The ray in the level frame: ground at y_level = camera height, wall at z_level = distance.
+  const double ly = r(1, 0) * xn + r(1, 1) * yn + r(1, 2);
+  const double lz = r(2, 0) * xn + r(2, 1) * yn + r(2, 2);
+  if (ly > 1e-12) take(scene_.camera_height_m / ly, Surface::kGround, scene_.ground_texture);
+  if (lz > 1e-12)
+    take(scene_.background_distance_m / lz, Surface::kBackground, scene_.background_texture);
+  return best;
+}
+
+}  // namespace depthbias::sim

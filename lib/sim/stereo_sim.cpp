@@ -1,0 +1,494 @@
+#include "sim/stereo_sim.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+#include <type_traits>
+
+namespace depthbias::sim {
+namespace {
+
+constexpr int kGaussBits = 12;  // bits of a draw that pick the normal quantile
+constexpr int kValidBits = 12;  // bits of the hole draw: p resolved to 1/4096
+constexpr int kMixBits = 8;     // bits of the edge-mixing fraction
+constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15ULL;
+
+// SplitMix64's output function: a counter-based generator, h(seed + i·γ) for draw i.
+inline std::uint64_t Mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+// Runs f(v_begin, v_end) over [0, rows) split into `threads` bands of rows.
+template <typename F>
+void ForRows(int rows, int threads, F f) {
+  threads = std::clamp(threads, 1, 16);
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t)
+    pool.emplace_back(f, rows * t / threads, rows * (t + 1) / threads);
+  f(0, rows / threads);
+  for (auto& t : pool) t.join();
+}
+
+// The 32 bits of a pair hash that belong to draw `counter` (its low half for even counters).
+inline std::uint32_t HalfOf(std::uint64_t pair_hash, std::uint64_t counter) {
+  return static_cast<std::uint32_t>(counter & 1 ? pair_hash >> 32 : pair_hash);
+}
+
+// 2^12 standard normal quantiles at the midpoints (i + ½)/2^12, rescaled to unit variance:
+// a 12-bit index draws N(0, 1) truncated at ±3.5σ.
+const std::array<float, 1 << kGaussBits>& GaussTable() {
+  static const std::array<float, 1 << kGaussBits> table = [] {
+    std::array<float, 1 << kGaussBits> t{};
+    const int n = 1 << kGaussBits;
+    std::vector<double> q(n);
+    double sum_sq = 0;
+    for (int i = 0; i < n; ++i) {
+      const double p = (i + 0.5) / n;
+      double lo = -10, hi = 10;  // Φ(x) = erfc(−x/√2)/2, inverted by bisection
+      for (int it = 0; it < 80; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+      }
+      q[i] = 0.5 * (lo + hi);
+      sum_sq += q[i] * q[i];
+    }
+    const double scale = 1.0 / std::sqrt(sum_sq / n);
+    for (int i = 0; i < n; ++i) t[i] = static_cast<float>(q[i] * scale);
+    return t;
+  }();
+  return table;
+}
+
+double Logit(double p) {
+  p = std::clamp(p, 1e-12, 1.0 - 1e-12);
+  return std::log(p / (1 - p));
+}
+
+// Chebyshev dilation of a 0/1 mask by r (separable max filter).
+std::vector<unsigned char> Dilate(const std::vector<unsigned char>& in, int w, int h, int r) {
+  if (r <= 0) return in;
+  std::vector<unsigned char> rows(in.size(), 0), out(in.size(), 0);
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      unsigned char m = 0;
+      for (int du = std::max(0, u - r); du <= std::min(w - 1, u + r) && !m; ++du)
+        m = in[static_cast<size_t>(v) * w + du];
+      rows[static_cast<size_t>(v) * w + u] = m;
+    }
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      unsigned char m = 0;
+      for (int dv = std::max(0, v - r); dv <= std::min(h - 1, v + r) && !m; ++dv)
+        m = rows[static_cast<size_t>(dv) * w + u];
+      out[static_cast<size_t>(v) * w + u] = m;
+    }
+  return out;
+}
+
+// Separable min or max filter of radius r.
+std::vector<float> Extreme(const std::vector<float>& in, int w, int h, int r, bool take_max) {
+  auto better = [take_max](float a, float b) { return take_max ? std::max(a, b) : std::min(a, b); };
+  std::vector<float> rows(in.size()), out(in.size());
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      float m = in[static_cast<size_t>(v) * w + u];
+      for (int du = std::max(0, u - r); du <= std::min(w - 1, u + r); ++du)
+        m = better(m, in[static_cast<size_t>(v) * w + du]);
+      rows[static_cast<size_t>(v) * w + u] = m;
+    }
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      float m = rows[static_cast<size_t>(v) * w + u];
+      for (int dv = std::max(0, v - r); dv <= std::min(h - 1, v + r); ++dv)
+        m = better(m, rows[static_cast<size_t>(dv) * w + u]);
+      out[static_cast<size_t>(v) * w + u] = m;
+    }
+  return out;
+}
+
+}  // namespace
+
+bool SimParams::IsValid(std::string* why) const {
+  if (!protocol.IsValid(why)) return false;
+  if (!sensor.IsValid(why)) return false;
+  if (!(departures.sigma_gain >= 0) || !(departures.invalid_odds_gain >= 0) ||
+      !(departures.depth_scale > 0)) {
+    if (why) *why = "effects: gains must be >= 0 and the depth scale > 0";
+    return false;
+  }
+  return true;
+}
+
+bool MetricsParams::IsValid(std::string* why) const {
+  if (!(region_margin_px >= 0 && region_margin_px <= 100)) {
+    if (why) *why = "region_margin_px must be in [0, 100]";
+    return false;
+  }
+  if (frames < 0) {
+    if (why) *why = "frames must be >= 0";
+    return false;
+  }
+  if (threads < 1 || threads > 256) {
+    if (why) *why = "threads must be in [1, 256]";
+    return false;
+  }
+  return true;
+}
+
+std::uint64_t CellSeed(std::uint64_t seed, const std::string& cell_name) {
+  std::uint64_t h = 0xCBF29CE484222325ULL;  // FNV-1a of the name
+  for (unsigned char c : cell_name) h = (h ^ c) * 0x100000001B3ULL;
+  return Mix64(Mix64(seed + kGolden) ^ h);
+}
+
+StereoSim::StereoSim(const SimParams& params, const Cell& cell, int threads)
+    : StereoSim(params, cell,
+                Window{0, 0, params.sensor.intrinsics.width, params.sensor.intrinsics.height},
+                threads) {}
+
+StereoSim::StereoSim(const SimParams& params, const Cell& cell, const Window& window,
+                     int threads)
+    : params_(params), cell_(cell), window_(window), threads_(threads) {
+  std::string why;
+  if (!params_.IsValid(&why)) throw std::invalid_argument("simulation parameters: " + why);
+  const auto& in = params_.sensor.intrinsics;
+  if (window_.width < 0 || window_.height < 0 || window_.u0 < 0 || window_.v0 < 0 ||
+      window_.u0 + window_.width > in.width || window_.v0 + window_.height > in.height)
+    throw std::invalid_argument("simulation window outside the image");
+  Build();
+}
+
+void StereoSim::Build() {
+  const SensorParams& s = params_.sensor;
+  const Departures& dep = params_.departures;
+  const auto& in = s.intrinsics;
+  const double fb = s.focal_px() * s.baseline_m;  // d = f·B/Z
+
+  truth_.panel = PlacePanel(params_.protocol.scene, params_.protocol.distance_is, cell_,
+                            dep.range_vs_depth_weight, dep.panel_yaw_deg);
+  truth_.panel_depth_m = truth_.panel.center_m.z();
+  truth_.panel_range_m = truth_.panel.center_m.norm();
+  truth_.panel_angle_deg =
+      std::acos(truth_.panel_depth_m / truth_.panel_range_m) * 180.0 / M_PI;
+  truth_.scenario = s.Scenario(cell_.light, cell_.preset, &truth_.scenario_listed);
+  truth_.cell_seed = CellSeed(params_.seed, cell_.name);
+  sigma_px_ = truth_.scenario.sigma_d_px * dep.sigma_gain;
+  sigma_f_ = static_cast<float>(sigma_px_);
+  gauss_ = GaussTable().data();
+
+  // Quantized disparity k·step → depth counts; out of [min, max] depth → no entry.
+  inv_step_ = 1.0 / s.subpixel_step_px;
+  k_min_ = static_cast<int>(std::ceil(fb / (s.max_depth_m * s.subpixel_step_px)));
+  k_max_ = static_cast<int>(std::floor(fb / (s.min_depth_m * s.subpixel_step_px)));
+  k_min_ = std::max(k_min_, 1);
+  inv_step_f_ = static_cast<float>(inv_step_);
+  k_min_f_ = static_cast<float>(k_min_);
+  k_end_f_ = static_cast<float>(k_max_ + 1);
+  counts_of_k_.assign(static_cast<size_t>(k_max_) + 1, 0);  // [0] stays 0: no depth
+  for (int k = k_min_; k <= k_max_; ++k) {
+    const double depth_m = dep.depth_scale * fb / (k * s.subpixel_step_px);  // Z = f·B/d
+    counts_of_k_[k] =
+        static_cast<std::uint16_t>(std::min(65535.0, std::round(depth_m / s.depth_units_m)));
+  }
+
+  // True depth by ray casting.
+  const int w = window_.width, h = window_.height;
+  const size_t n = static_cast<size_t>(w) * h;
+  RayCaster caster(params_.protocol.scene, truth_.panel);
+  true_depth_m_.assign(n, 0.f);
+  surface_.assign(n, 0);
+  std::vector<float> texture(n, 0.f), disparity(n, 0.f);
+  ForRows(h, threads_, [&](int v_begin, int v_end) {
+    for (int v = v_begin; v < v_end; ++v) {
+      const double yn = (window_.v0 + v - in.ppy) / in.fy;
+      for (int u = 0; u < w; ++u) {
+        const double xn = (window_.u0 + u - in.ppx) / in.fx;
+        const Hit hit = caster.Cast(xn, yn);
+        const size_t i = static_cast<size_t>(v) * w + u;
+        true_depth_m_[i] = static_cast<float>(hit.depth_m);
+        surface_[i] = static_cast<unsigned char>(hit.surface);
+        texture[i] = static_cast<float>(hit.texture);
+        if (hit.surface != Surface::kNone) disparity[i] = static_cast<float>(fb / hit.depth_m);
+      }
+    }
+  });
+
+  // Depth edges, occlusion side: where two 4-neighbours' depths jump (relative jump beyond
+  // edge_jump_rel), the far pixel is on the edge's far side, the background one camera sees and
+  // the other does not. It carries the near side's depth; pixels within edge_band_px of it that
+  // are markedly farther than that near depth are in the band.
+  std::vector<unsigned char> near_edge(n, 0);
+  if (s.edge_band_px > 0) {
+    std::vector<float> near_z(n, 1e30f);
+    auto mark = [&](size_t a, size_t b) {
+      if (!surface_[a] && !surface_[b]) return;
+      if (!surface_[a] || !surface_[b]) {  // nothing hit beyond the edge: no depth there anyway
+        const size_t far = surface_[a] ? b : a, near = surface_[a] ? a : b;
+        near_z[far] = std::min(near_z[far], true_depth_m_[near]);
+        return;
+      }
+      const float za = true_depth_m_[a], zb = true_depth_m_[b];
+      if (std::fabs(za - zb) <= s.edge_jump_rel * std::min(za, zb)) return;
+      const size_t far = za > zb ? a : b;
+      near_z[far] = std::min(near_z[far], std::min(za, zb));
+    };
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const size_t i = static_cast<size_t>(v) * w + u;
+        if (u + 1 < w) mark(i, i + 1);
+        if (v + 1 < h) mark(i, i + w);
+      }
+    const std::vector<float> near_min = Extreme(near_z, w, h, s.edge_band_px - 1, false);
+    for (size_t i = 0; i < n; ++i)
+      near_edge[i] = surface_[i] && near_min[i] * (1 + s.edge_jump_rel) < true_depth_m_[i];
+  }
+
+  // Edge mixing: the other side of the nearest edge within the mixing width.
+  mix_delta_px_.assign(n, 0.f);
+  const int mix_w = static_cast<int>(dep.edge_mix_width_px);
+  mixing_ = mix_w > 0 && dep.edge_mix_strength > 0;
+  if (mixing_) {
+    const std::vector<float> lo = Extreme(disparity, w, h, mix_w, false);
+    const std::vector<float> hi = Extreme(disparity, w, h, mix_w, true);
+    for (size_t i = 0; i < n; ++i) {
+      if (!surface_[i] || !(hi[i] > lo[i] * (1 + s.edge_jump_rel))) continue;
+      const float d = disparity[i];
+      const float other = (d - lo[i] > hi[i] - d) ? lo[i] : hi[i];
+      mix_delta_px_[i] = static_cast<float>(dep.edge_mix_strength * (other - d));
+    }
+  }
+
+  // Static disparity and hole probability.
+  static_disparity_px_.assign(n, 0.f);
+  valid_threshold_.assign(n, 0);
+  const double logit_scenario = Logit(truth_.scenario.invalid_prob);
+  const bool offset_varies = !dep.disparity_over_time.empty();
+  const double g = dep.invalid_odds_gain;
+  ForRows(h, threads_, [&](int v_begin, int v_end) {
+    double last_texture = -1, last_p = 0;
+    for (int v = v_begin; v < v_end; ++v) {
+      const double yn = (window_.v0 + v - in.ppy) / in.fy;
+      for (int u = 0; u < w; ++u) {
+        const size_t i = static_cast<size_t>(v) * w + u;
+        if (!surface_[i]) continue;
+        const double xn = (window_.u0 + u - in.ppx) / in.fx;
+        static_disparity_px_[i] =
+            static_cast<float>(disparity[i] + dep.StaticDisparityPx(xn, yn));
+        double t = texture[i];
+        if (cell_.emitter_on) {
+          const double reach = s.emitter_reach_m / true_depth_m_[i];
+          t += s.emitter_texture * std::min(1.0, reach * reach);
+        }
+        if (t != last_texture) {  // surfaces share textures: the logistic once per change
+          last_texture = t;
+          last_p = 1.0 / (1.0 + std::exp(-(logit_scenario -
+                                           s.texture_slope * (t - s.reference_texture))));
+        }
+        double p = last_p;
+        if (truth_.scenario.invalid_prob <= 0) p = 0;
+        if (truth_.scenario.invalid_prob >= 1) p = 1;
+        if (near_edge[i]) p = std::max(p, s.edge_invalid_prob);
+        p = g * p / (1 - p + g * p);  // odds × g
+        if (!std::isfinite(p)) p = 1;
+        valid_threshold_[i] = static_cast<std::uint16_t>(
+            std::lround(std::clamp(1.0 - p, 0.0, 1.0) * (1 << kValidBits)));
+        // A disparity that noise (truncated at 3.5σ) and mixing cannot bring into range never
+        // gives depth: skip its draws (not with a time-varying offset, which has no bound).
+        const double reach_px = 3.6 * sigma_px_ + std::fabs(mix_delta_px_[i]);
+        if (!offset_varies &&
+            ((static_disparity_px_[i] + reach_px) * inv_step_ + 0.5 < k_min_ ||
+             (static_disparity_px_[i] - reach_px) * inv_step_ + 0.5 >= k_max_ + 1))
+          valid_threshold_[i] = 0;
+      }
+    }
+  });
+}
+
+std::uint64_t StereoSim::Counter(int frame_index, int pixel) const {
+  const auto& in = params_.sensor.intrinsics;
+  const int u = window_.u0 + pixel % window_.width;
+  const int v = window_.v0 + pixel / window_.width;
+  return static_cast<std::uint64_t>(frame_index) * static_cast<std::uint64_t>(in.width) *
+             in.height +
+         static_cast<std::uint64_t>(v) * in.width + u;
+}
+
+// One 64-bit hash serves two neighbouring draws (counters 2j and 2j + 1): 32 bits each, of
+// which 12 pick the normal quantile, 12 the hole draw and 8 the mixing fraction.
+inline std::uint64_t StereoSim::PairHash(std::uint64_t counter) const {
+  return Mix64(truth_.cell_seed + (counter >> 1) * kGolden);
+}
+
+namespace {
+
+// Raw views of the static maps for the inner loops (the compiler cannot prove that the frame
+// being written does not alias the maps' vectors, so it would reload them at every pixel).
+struct Maps {
+  const float* disparity;
+  const float* mix_delta;
+  const std::uint16_t* valid_threshold;
+  const float* gauss;
+  const std::uint16_t* counts_of_k;
+  float inv_step, k_min, k_end, offset, sigma;
+};
+
+template <bool kMixing>
+inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
+  const std::uint32_t uniform_valid = (bits >> kGaussBits) & ((1u << kValidBits) - 1);
+  // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½). Single
+  // precision: d < 200 px is resolved to 2e-5 px, far below the 1/32 px step.
+  float d = m.disparity[pixel] + m.offset + m.sigma * m.gauss[bits & ((1u << kGaussBits) - 1)];
+  if constexpr (kMixing) {
+    const float mix = static_cast<float>(bits >> (kGaussBits + kValidBits)) *
+                      (1.0f / (1 << kMixBits));
+    d += mix * m.mix_delta[pixel];
+  }
+  const float x = d * m.inv_step + 0.5f;
+  // Valid and within [min, max] depth; counts_of_k[0] = 0 stands for "no depth".
+  const bool ok =
+      (uniform_valid < m.valid_threshold[pixel]) & (x >= m.k_min) & (x < m.k_end);
+  return m.counts_of_k[ok ? static_cast<int>(x) : 0];
+}
+
+}  // namespace
+
+void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) const {
+  const auto& in = params_.sensor.intrinsics;
+  const auto& proto = params_.protocol;
+  frame->width = in.width;
+  frame->height = in.height;
+  frame->depth_units_m = params_.sensor.depth_units_m;
+  frame->frame_number = static_cast<std::uint64_t>(frame_index) + 1;
+  frame->timestamp_ms = 1000.0 * frame_index / proto.fps;
+  const size_t n = static_cast<size_t>(in.width) * in.height;
+  const bool whole = window_.width == in.width && window_.height == in.height;
+  if (frame->counts.size() != n || !whole) frame->counts.assign(n, 0);
+  const float offset =
+      static_cast<float>(params_.departures.DisparityAtTimePx(frame_index / proto.fps));
+  const Maps maps{static_disparity_px_.data(), mix_delta_px_.data(), valid_threshold_.data(),
+                  gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
+                  sigma_f_};
+  std::uint16_t* const counts = frame->counts.data();
+  auto rows = [&, counts](auto mixing, int v_begin, int v_end) {
+    for (int v = v_begin; v < v_end; ++v) {
+      std::uint16_t* row = counts + static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
+      const int base = v * window_.width;
+      const std::uint64_t counter = Counter(frame_index, base);
+      std::uint64_t pair = ~0ULL, hash = 0;
+      for (int u = 0; u < window_.width; ++u) {
+        if (!maps.valid_threshold[base + u]) {  // never gives depth
+          row[u] = 0;
+          continue;
+        }
+        const std::uint64_t c = counter + static_cast<std::uint64_t>(u);
+        if ((c >> 1) != pair) {
+          pair = c >> 1;
+          hash = PairHash(c);
+        }
+        row[u] = Draw<decltype(mixing)::value>(maps, HalfOf(hash, c), base + u);
+      }
+    }
+  };
+  if (mixing_)
+    ForRows(window_.height, threads, [&](int a, int b) { rows(std::true_type{}, a, b); });
+  else
+    ForRows(window_.height, threads, [&](int a, int b) { rows(std::false_type{}, a, b); });
+}
+
+void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
+                             std::vector<std::uint16_t>* counts) const {
+  const float offset = static_cast<float>(
+      params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
+  const Maps maps{static_disparity_px_.data(), mix_delta_px_.data(), valid_threshold_.data(),
+                  gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
+                  sigma_f_};
+  const auto& in = params_.sensor.intrinsics;
+  const std::uint64_t frame_base = static_cast<std::uint64_t>(frame_index) *
+                                   static_cast<std::uint64_t>(in.width) * in.height;
+  const size_t n = pixels.window.size();
+  counts->resize(n);
+  std::uint16_t* const out = counts->data();
+  const int* const window = pixels.window.data();
+  const std::uint64_t* const image = pixels.image.data();
+  std::uint64_t pair = ~0ULL, hash = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const int p = window[i];
+    if (!maps.valid_threshold[p]) {
+      out[i] = 0;
+      continue;
+    }
+    const std::uint64_t c = frame_base + image[i];
+    if ((c >> 1) != pair) {  // neighbours in a row share their hash
+      pair = c >> 1;
+      hash = PairHash(c);
+    }
+    const std::uint32_t bits = HalfOf(hash, c);
+    out[i] = mixing_ ? Draw<true>(maps, bits, p) : Draw<false>(maps, bits, p);
+  }
+}
+
+PixelList StereoSim::RegionPixels(double margin_px) const {
+  const auto& in = params_.sensor.intrinsics;
+  const PanelPose& panel = truth_.panel;
+  // Panel coordinates (along width, along height) where the ray (xn, yn, 1) meets its plane.
+  auto on_plane = [&](double xn, double yn, Eigen::Vector2d* st) {
+    const Eigen::Vector3d ray(xn, yn, 1.0);
+    const double denom = panel.normal.dot(ray);
+    if (std::fabs(denom) < 1e-12) return false;
+    const double t = panel.normal.dot(panel.center_m) / denom;
+    if (!(t > 0)) return false;
+    const Eigen::Vector3d q = t * ray - panel.center_m;
+    *st = Eigen::Vector2d(q.dot(panel.axis_width), q.dot(panel.axis_height));
+    return true;
+  };
+  // One pixel's footprint on the panel at its centre: |∂(s,t)/∂u| + |∂(s,t)/∂v|.
+  const double cu = in.ppx + in.fx * panel.center_m.x() / panel.center_m.z();
+  const double cv = in.ppy + in.fy * panel.center_m.y() / panel.center_m.z();
+  auto at = [&](double du, double dv) {
+    Eigen::Vector2d st(0, 0);
+    on_plane((cu + du - in.ppx) / in.fx, (cv + dv - in.ppy) / in.fy, &st);
+    return st;
+  };
+  const Eigen::Vector2d du = at(0.5, 0) - at(-0.5, 0), dv = at(0, 0.5) - at(0, -0.5);
+  const double half_w = 0.5 * panel.width_m - margin_px * (std::fabs(du.x()) + std::fabs(dv.x()));
+  const double half_h = 0.5 * panel.height_m - margin_px * (std::fabs(du.y()) + std::fabs(dv.y()));
+  PixelList pixels;
+  if (half_w <= 0 || half_h <= 0) return pixels;
+  for (int v = 0; v < window_.height; ++v) {
+    const double yn = (window_.v0 + v - in.ppy) / in.fy;
+    for (int u = 0; u < window_.width; ++u) {
+      Eigen::Vector2d st;
+      if (!on_plane((window_.u0 + u - in.ppx) / in.fx, yn, &st)) continue;
+      if (std::fabs(st.x()) > half_w || std::fabs(st.y()) > half_h) continue;
+      const int i = v * window_.width + u;
+      pixels.window.push_back(i);
+      pixels.image.push_back(Counter(0, i));
+    }
+  }
+  return pixels;
+}
+
+PixelList StereoSim::PanelPixels(int margin_px) const {
+  const int w = window_.width, h = window_.height;
+  std::vector<unsigned char> not_panel(surface_.size());
+  for (size_t i = 0; i < surface_.size(); ++i)
+    not_panel[i] = surface_[i] != static_cast<unsigned char>(Surface::kPanel);
+  const std::vector<unsigned char> eroded_out = Dilate(not_panel, w, h, margin_px);
+  PixelList pixels;
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const int i = v * w + u;
+      // Pixels nearer the window's border than the margin cannot be shown inside the panel.
+      if (u < margin_px || v < margin_px || u >= w - margin_px || v >= h - margin_px) continue;
+      if (eroded_out[i]) continue;
+      pixels.window.push_back(i);
+      pixels.image.push_back(Counter(0, i));
+    }
+  return pixels;
+}
+
+}  // namespace depthbias::sim

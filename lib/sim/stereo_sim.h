@@ -1,0 +1,140 @@
+#pragma once
+// The simulated D455 of one recording: the scene's true depth by ray casting, the per-pixel
+// static maps of the sensor model (disparity, hole probability, edge mixing), and the frames
+// drawn from them with counter-based random numbers. The random draw of pixel (u, v) in frame k
+// depends only on (seed, recording name, k, v·width + u): a frame rendered whole and the same
+// pixels evaluated on the panel's footprint alone (the metrics-only path) are identical, and a
+// change of a parameter keeps the draws (common random numbers).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "camera/depth_frame.h"
+#include "camera/panel_metrics.h"
+#include "sim/effects.h"
+#include "sim/scene.h"
+#include "sim/sensor.h"
+
+namespace depthbias::sim {
+
+// Everything a simulation run needs.
+struct SimParams {
+  ProtocolParams protocol;
+  SensorParams sensor;
+  Departures departures;  // from the effects (BuildDepartures); none = the base model
+  std::uint64_t seed = 1;
+
+  bool IsValid(std::string* why) const;
+};
+
+// An image window [u0, u0 + width) × [v0, v0 + height).
+struct Window {
+  int u0 = 0;
+  int v0 = 0;
+  int width = 0;
+  int height = 0;
+};
+
+// Pixels of a window: their indices in the window and in the image (both row-major).
+struct PixelList {
+  std::vector<int> window;
+  std::vector<std::uint64_t> image;
+  size_t size() const { return window.size(); }
+  bool empty() const { return window.empty(); }
+};
+
+// What the recording's scene is, whatever the sensor makes of it.
+struct CellTruth {
+  PanelPose panel;
+  double panel_depth_m = 0;   // true Z of the panel's centre
+  double panel_range_m = 0;   // true range of the panel's centre
+  double panel_angle_deg = 0; // true off-axis angle of the panel's centre
+  ScenarioParams scenario;    // the noise and invalidation used
+  bool scenario_listed = false;  // false: the sensor's fallback was used
+  std::uint64_t cell_seed = 0;
+};
+
+class StereoSim {
+ public:
+  // Throws std::invalid_argument if params are not valid. Without a window, the whole image.
+  // The static maps are built by `threads` threads (they do not depend on it).
+  StereoSim(const SimParams& params, const Cell& cell, int threads = 1);
+  StereoSim(const SimParams& params, const Cell& cell, const Window& window, int threads = 1);
+
+  const CellTruth& truth() const { return truth_; }
+  const Window& window() const { return window_; }
+  const SimParams& params() const { return params_; }
+
+  // Frame k (from 0) of the recording: full image size, 0 outside the window. Rows are split
+  // over `threads` threads (the pixels do not depend on it).
+  void Render(int frame_index, camera::DepthFrame* frame, int threads = 1) const;
+  // Depth counts of the listed pixels in frame k: the same values Render gives them.
+  void RenderPixels(int frame_index, const PixelList& pixels,
+                    std::vector<std::uint16_t>* counts) const;
+
+  // Window pixels that see the panel, and that still do after eroding it by margin_px.
+  PixelList PanelPixels(int margin_px) const;
+  // The panel's image region as panel_extract draws it: pixels whose centre ray meets the panel
+  // rectangle shrunk on every side by margin_px pixel footprints (at the panel's centre).
+  PixelList RegionPixels(double margin_px) const;
+  // True depth Z of a window pixel (0 where nothing is hit).
+  double TrueDepth(int pixel) const { return true_depth_m_[pixel]; }
+
+ private:
+  void Build();
+  std::uint64_t Counter(int frame_index, int pixel) const;  // the draw's index
+  std::uint64_t PairHash(std::uint64_t counter) const;
+
+  SimParams params_;
+  Cell cell_;
+  Window window_;
+  int threads_ = 1;
+  CellTruth truth_;
+  double sigma_px_ = 0;
+  const float* gauss_ = nullptr;  // the standard normal table
+  double inv_step_ = 32;
+  float inv_step_f_ = 32, k_min_f_ = 0, k_end_f_ = 0, sigma_f_ = 0;  // single-precision copies
+  int k_min_ = 0;
+  int k_max_ = 0;
+  std::vector<std::uint16_t> counts_of_k_;  // depth counts of quantized disparity k·step
+  std::vector<float> static_disparity_px_;  // true disparity + static departures; ≤ 0: no depth
+  std::vector<float> mix_delta_px_;         // strength·(other side − own disparity)
+  bool mixing_ = false;                     // edge mixing on: mix_delta_px_ is used
+  std::vector<std::uint16_t> valid_threshold_;  // valid if a 12-bit uniform is below it
+  std::vector<float> true_depth_m_;
+  std::vector<unsigned char> surface_;
+};
+
+// Options of the metrics-only path.
+struct MetricsParams {
+  double region_margin_px = 0.5;  // panel rectangle shrunk by this many pixel footprints a side
+  int frames = 0;            // 0: the protocol's
+  int threads = 1;           // recordings evaluated in parallel (results do not depend on it)
+
+  bool IsValid(std::string* why) const;
+};
+
+// One recording's metrics (DESIGN.md's panel-metrics row), evaluated on the panel's image
+// footprint without rendering whole frames. bag = the recording's name + ".bag".
+struct CellMetricsResult {
+  camera::PanelMetrics metrics;
+  CellTruth truth;
+  int region_px = 0;
+};
+CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
+                                  const MetricsParams& metrics = {});
+
+// The given recordings, in their order.
+std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
+                                                    const std::vector<Cell>& cells,
+                                                    const MetricsParams& metrics = {});
+
+// Every recording of the protocol, in MakeCells' order.
+std::vector<CellMetricsResult> SimulateProtocolMetrics(const SimParams& params,
+                                                       const MetricsParams& metrics = {});
+
+// The seed of one recording: a hash of the run's seed and the recording's name.
+std::uint64_t CellSeed(std::uint64_t seed, const std::string& cell_name);
+
+}  // namespace depthbias::sim
