@@ -3,7 +3,10 @@
 # installs what is missing, builds, then
 #   1. fits the article's eq. 6 (paper6, λ = 0.001): reproduces its Table 6;
 #   2. fits the default physics-grounded model, cross-validated, and writes its weights;
-#   3. corrects every measurement with it (corrected distance, predicted bias, margin).
+#   3. corrects every measurement with it (corrected distance, predicted bias, margin);
+#   4. simulates the article's 128 recordings with the calibrated D455 model (metrics only);
+#   5. end to end on recordings: simulates 8 of them as RealSense bags (config/protocol_demo.yaml),
+#      lists one with bag_info, and measures them all with panel_extract (RANSAC, no boxes).
 # Outputs go to OUT_DIR (default out/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,3 +26,16 @@ echo "== default model, cross-validated"
 echo
 echo "== corrected distances and safety margins"
 "$BIN/correct_depth" --weights "$OUT/weights.yaml" --in "$DATA" --out "$OUT/corrected.csv"
+echo
+echo "== simulated article protocol, calibrated sensor (metrics only)"
+"$BIN/simulate" --protocol config/protocol_paper.yaml --metrics-only --out "$OUT/sim_metrics.csv"
+echo
+echo "== simulated recordings → bags → panel_extract"
+rm -rf "$OUT/sim_bags"
+"$BIN/simulate" --protocol config/protocol_demo.yaml --out-dir "$OUT/sim_bags"
+"$BIN/bag_info" "$OUT/sim_bags/sim_daylight_emitter-on_8m_20deg_HD.bag"
+"$BIN/panel_extract" --manifest "$OUT/sim_bags/manifest.csv" --out "$OUT/sim_extract.csv" \
+  --panels-out "$OUT/sim_panels.json" "$OUT/sim_bags"
+echo
+echo "outputs in $OUT/: weights_paper6.yaml weights.yaml corrected.csv sim_metrics.csv"
+echo "  sim_bags/ (bags + manifest.csv) sim_extract.csv sim_panels.json"
