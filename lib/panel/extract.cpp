@@ -23,6 +23,19 @@ bool FrameMatches(const camera::DepthFrame& f, const camera::Intrinsics& in, std
   return true;
 }
 
+// Adds every remaining frame of source to measurer; false (why set) at a frame that does not
+// match the intrinsics.
+bool MeasureAll(FrameSource& source, const camera::Intrinsics& intrinsics,
+                camera::DepthFrame* frame, RegionMeasurer* measurer, std::uint64_t* frames_read,
+                std::string* why) {
+  while (source.Next(frame)) {
+    ++*frames_read;
+    if (!FrameMatches(*frame, intrinsics, why)) return false;
+    measurer->Add(*frame);
+  }
+  return true;
+}
+
 ExtractResult Fail(ExtractResult* r, const std::string& status, const std::string& message) {
   r->metrics.status = status;
   r->metrics.message = message;
@@ -58,11 +71,8 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
       return Fail(&res, "error", "the box lies outside the image");
     }
     RegionMeasurer measurer(&rays, res.region, params.baseline_m);
-    while (source.Next(&frame)) {
-      ++res.frames_read;
-      if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
-      measurer.Add(frame);
-    }
+    if (!MeasureAll(source, intrinsics, &frame, &measurer, &res.frames_read, &why))
+      return Fail(&res, "error", why);
     // The box's centre ray gives a provisional direction; then the box's pixels on the fitted
     // plane give the panel's centre and size.
     camera::PanelMetrics& m = res.metrics;
@@ -109,11 +119,8 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
   res.passes = 2;
   RegionMeasurer measurer(&rays, res.region, params.baseline_m);
-  while (source.Next(&frame)) {
-    ++res.frames_read;
-    if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
-    measurer.Add(frame);
-  }
+  if (!MeasureAll(source, intrinsics, &frame, &measurer, &res.frames_read, &why))
+    return Fail(&res, "error", why);
   camera::PanelMetrics& m = res.metrics;
   res.measure = measurer.Finish(res.detection.panel.center_m, &m);
   m.panel_width_m = res.detection.panel.width_m;
