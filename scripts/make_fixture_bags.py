@@ -20,6 +20,9 @@ import time
 import numpy as np
 import pyrealsense2 as rs
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from check_playback import play  # noqa: E402  (librealsense playback of a bag)
+
 F32 = lambda v: float(np.float32(v))  # the value librealsense stores (options, units: float)
 
 DEVICE_INFO = {
@@ -201,29 +204,12 @@ def option_name(opt):
 
 def check_playback(path, truth):
     """Plays the bag back with librealsense and compares with the truth."""
-    ctx = rs.context()
-    dev = ctx.load_device(path)
-    pb = dev.as_playback()
-    pb.set_real_time(False)
-    sensor = dev.first_depth_sensor()
-    profile = [p for p in sensor.get_stream_profiles() if p.stream_type() == rs.stream.depth][0]
-    got = []
-    sensor.open(profile)
-    sensor.start(lambda f: got.append((f.get_frame_number(), f.get_timestamp(),
-                                       np.asanyarray(f.get_data()).copy(),
-                                       f.as_depth_frame().get_units())))
-    deadline = time.time() + 10.0
-    while len(got) < len(truth["frames"]) and time.time() < deadline:
-        time.sleep(0.02)
-    time.sleep(0.1)  # any extra frame would show up now
-    sensor.stop()
-    sensor.close()
+    got, _, _, intr = play(path, len(truth["frames"]))
     assert len(got) == len(truth["frames"]), (path, len(got))
     for (num, ts, img, units), t in zip(got, truth["frames"]):
         assert num == t["frame_number"] and abs(ts - t["timestamp_ms"]) < 1e-3, (num, ts)
         assert np.array_equal(img.flatten(), np.array(t["pixels"], dtype=np.uint16)), path
         assert units == truth["depth_units"], (units, truth["depth_units"])
-    intr = profile.as_video_stream_profile().get_intrinsics()
     assert abs(intr.fx - truth["intrinsics"]["fx"]) < 1e-4
 
 
