@@ -5,12 +5,14 @@
 //   simulate --protocol P --metrics-only --out metrics.csv [...]   the fast metrics-only path
 //   simulate --protocol P --calibrate-to real.csv --out sensor.yaml [...]   fit σ_d and holes
 // --sensor F (or "builtin") overrides the protocol's sensor file; --margin-px M the region margin;
-// --threads N recordings evaluated in parallel by the metrics-only path (default: all cores).
+// --threads N recordings simulated in parallel (default: all cores; results do not depend on it).
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <future>
 #include <iostream>
+#include <mutex>
 #include <string>
 #include <thread>
 
@@ -52,48 +54,84 @@ std::string Fixed(double v, int digits) {
   return buf;
 }
 
-void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
-                     const std::string& dir) {
-  fs::create_directories(dir);
-  std::vector<io::ManifestRow> rows;
-  for (const sim::Cell& cell : sim::MakeCells(params.protocol)) {
-    const sim::StereoSim simulator(params, cell, 2);
-    io::BagWriterConfig config;
-    config.intrinsics = params.sensor.intrinsics;
-    config.depth_units_m = params.sensor.depth_units_m;
-    config.fps = params.protocol.fps;
-    sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
-    config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
-    config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
-    config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
-    const std::string bag = cell.name + ".bag";
-    io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
-    // Frame k + 1 is rendered while frame k is written.
-    camera::DepthFrame frames[2];
-    simulator.Render(0, &frames[0], 2);
-    for (int k = 0; k < params.protocol.frames; ++k) {
+// One recording: its bag in dir, and its manifest row. `threads` threads render its frames; with
+// two or more, frame k + 1 is rendered while frame k is written.
+io::ManifestRow WriteRecording(const sim::SimParams& params, const sim::Cell& cell,
+                               const sim::MetricsParams& metrics, const std::string& dir,
+                               int threads) {
+  const sim::StereoSim simulator(params, cell, threads);
+  io::BagWriterConfig config;
+  config.intrinsics = params.sensor.intrinsics;
+  config.depth_units_m = params.sensor.depth_units_m;
+  config.fps = params.protocol.fps;
+  sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
+  config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
+  config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
+  config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
+  const std::string bag = cell.name + ".bag";
+  io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
+  camera::DepthFrame frames[2];
+  const int n = params.protocol.frames;
+  if (threads < 2) {
+    for (int k = 0; k < n; ++k) {
+      simulator.Render(k, &frames[0]);
+      writer.Write(frames[0]);
+    }
+  } else {
+    simulator.Render(0, &frames[0], threads);
+    for (int k = 0; k < n; ++k) {
       std::future<void> next;
-      if (k + 1 < params.protocol.frames)
+      if (k + 1 < n)
         next = std::async(std::launch::async,
-                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2], 2); });
+                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2], threads); });
       writer.Write(frames[k % 2]);
       if (next.valid()) next.get();
     }
-    writer.Close();
-    const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell, metrics);
-    io::ManifestRow row;
-    row.bag = bag;
-    row.distance_m = cell.distance_m;
-    row.angle_deg = cell.angle_deg;
-    row.light = cell.light;
-    row.preset = cell.preset;
-    row.emitter = cell.emitter_on ? "on" : "off";
-    row.extras = {{"true_depth_m", Fixed(truth.truth.panel_depth_m, 6)},
-                  {"true_range_m", Fixed(truth.truth.panel_range_m, 6)},
-                  {"true_angle_deg", Fixed(truth.truth.panel_angle_deg, 4)},
-                  {"true_hole_rate_pct", Fixed(truth.metrics.hole_rate_pct, 3)}};
-    rows.push_back(row);
   }
+  writer.Close();
+  const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell, metrics);
+  io::ManifestRow row;
+  row.bag = bag;
+  row.distance_m = cell.distance_m;
+  row.angle_deg = cell.angle_deg;
+  row.light = cell.light;
+  row.preset = cell.preset;
+  row.emitter = cell.emitter_on ? "on" : "off";
+  row.extras = {{"true_depth_m", Fixed(truth.truth.panel_depth_m, 6)},
+                {"true_range_m", Fixed(truth.truth.panel_range_m, 6)},
+                {"true_angle_deg", Fixed(truth.truth.panel_angle_deg, 4)},
+                {"true_hole_rate_pct", Fixed(truth.metrics.hole_rate_pct, 3)}};
+  return row;
+}
+
+// Every recording of the protocol, metrics.threads at a time (each on one thread when there are
+// enough recordings to keep the cores busy), then DIR/manifest.csv. The first error stops the run.
+void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
+                     const std::string& dir) {
+  fs::create_directories(dir);
+  const std::vector<sim::Cell> cells = sim::MakeCells(params.protocol);
+  std::vector<io::ManifestRow> rows(cells.size());
+  const int workers = std::max(1, std::min<int>(metrics.threads, static_cast<int>(cells.size())));
+  const int per_cell = std::max(1, metrics.threads / workers);
+  std::atomic<size_t> next{0};
+  std::mutex error_mutex;
+  std::string error;
+  auto work = [&] {
+    for (size_t i; (i = next++) < cells.size();) {
+      try {
+        rows[i] = WriteRecording(params, cells[i], metrics, dir, per_cell);
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (error.empty()) error = e.what();
+        next = cells.size();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < workers; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (!error.empty()) throw Fail(error);
   io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
                     {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
   std::printf("simulate: %zu recordings of %d frames in %s\n", rows.size(),

@@ -26,12 +26,19 @@
 namespace depthbias::io {
 namespace bag_detail {
 
-// A message already serialized, with its type's name, md5 and definition.
+// A message already serialized, with its type's name, md5 and definition: `bytes`, then the
+// `span_size` bytes at `span` (borrowed: a frame's pixels go into the bag without a copy of
+// their own), then `tail`.
 struct RawMessage {
   std::string datatype;
   std::string md5;
   std::string definition;
   std::vector<std::uint8_t> bytes;
+  const void* span = nullptr;
+  std::size_t span_size = 0;
+  std::vector<std::uint8_t> tail;
+
+  std::size_t size() const { return bytes.size() + span_size + tail.size(); }
 };
 
 }  // namespace bag_detail
@@ -61,11 +68,13 @@ template <>
 struct Serializer<depthbias::io::bag_detail::RawMessage> {
   template <typename Stream>
   inline static void write(Stream& stream, const depthbias::io::bag_detail::RawMessage& m) {
-    if (m.bytes.empty()) return;
-    std::memcpy(stream.advance(m.bytes.size()), m.bytes.data(), m.bytes.size());
+    if (!m.bytes.empty())
+      std::memcpy(stream.advance(m.bytes.size()), m.bytes.data(), m.bytes.size());
+    if (m.span_size) std::memcpy(stream.advance(m.span_size), m.span, m.span_size);
+    if (!m.tail.empty()) std::memcpy(stream.advance(m.tail.size()), m.tail.data(), m.tail.size());
   }
   inline static uint32_t serializedLength(const depthbias::io::bag_detail::RawMessage& m) {
-    return static_cast<uint32_t>(m.bytes.size());
+    return static_cast<uint32_t>(m.size());
   }
 };
 }  // namespace serialization
@@ -112,6 +121,7 @@ RawMessage Untyped(const char* datatype, const char* md5, const char* definition
 class Out {
  public:
   explicit Out(RawMessage* m) : b_(&m->bytes) {}
+  explicit Out(std::vector<std::uint8_t>* bytes) : b_(bytes) {}
   Out& U8(std::uint8_t v) {
     b_->push_back(v);
     return *this;
@@ -134,11 +144,6 @@ class Out {
   Out& Str(const std::string& s) {
     U32(static_cast<std::uint32_t>(s.size()));
     b_->insert(b_->end(), s.begin(), s.end());
-    return *this;
-  }
-  Out& Bytes(const void* p, std::size_t n) {
-    const auto* c = static_cast<const std::uint8_t*>(p);
-    b_->insert(b_->end(), c, c + n);
     return *this;
   }
 
@@ -295,7 +300,6 @@ void BagWriter::Write(const camera::DepthFrame& frame) {
   d.last_ns = t;
 
   RawMessage image = Typed<sensor_msgs::Image>();
-  image.bytes.reserve(frame.counts.size() * 2 + 64);
   Out o(&image);
   // Device timestamp as ros::Time (seconds and nanoseconds), as librealsense stamps frames.
   const std::uint64_t stamp_ns =
@@ -307,8 +311,9 @@ void BagWriter::Write(const camera::DepthFrame& frame) {
   o.U32(static_cast<std::uint32_t>(frame.height)).U32(static_cast<std::uint32_t>(frame.width));
   o.Str("mono16").U8(0).U32(static_cast<std::uint32_t>(frame.width * 2));
   o.U32(static_cast<std::uint32_t>(frame.counts.size() * 2));
-  o.Bytes(frame.counts.data(), frame.counts.size() * 2);
-  o.F32(static_cast<float>(frame.depth_units_m));
+  image.span = frame.counts.data();
+  image.span_size = frame.counts.size() * 2;
+  Out(&image.tail).F32(static_cast<float>(frame.depth_units_m));
   try {
     d.Put(d.stream + "image/data", t, image);
     d.Put(d.stream + "image/metadata", t, KeyValue("timestamp_domain", "Hardware Clock"));

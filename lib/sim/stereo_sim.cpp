@@ -242,9 +242,19 @@ void StereoSim::Build() {
         if (u + 1 < w) mark(i, i + 1);
         if (v + 1 < h) mark(i, i + w);
       }
-    const std::vector<float> near_min = Extreme(near_z, w, h, s.edge_band_px - 1, false);
-    for (size_t i = 0; i < n; ++i)
-      near_edge[i] = surface_[i] && near_min[i] * (1 + s.edge_jump_rel) < true_depth_m_[i];
+    // Each marked pixel stamps its band (edges are sparse: this is the minimum filter of near_z
+    // evaluated where it is finite).
+    const int r = s.edge_band_px - 1;
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const float z = near_z[static_cast<size_t>(v) * w + u];
+        if (z >= 1e30f) continue;
+        for (int bv = std::max(0, v - r); bv <= std::min(h - 1, v + r); ++bv)
+          for (int bu = std::max(0, u - r); bu <= std::min(w - 1, u + r); ++bu) {
+            const size_t i = static_cast<size_t>(bv) * w + bu;
+            if (surface_[i] && z * (1 + s.edge_jump_rel) < true_depth_m_[i]) near_edge[i] = 1;
+          }
+      }
   }
 
   // Edge mixing: the other side of the nearest edge within the mixing width.
@@ -294,8 +304,8 @@ void StereoSim::Build() {
         if (near_edge[i]) p = std::max(p, s.edge_invalid_prob);
         p = g * p / (1 - p + g * p);  // odds × g
         if (!std::isfinite(p)) p = 1;
-        valid_threshold_[i] = static_cast<std::uint16_t>(
-            std::lround(std::clamp(1.0 - p, 0.0, 1.0) * (1 << kValidBits)));
+        valid_threshold_[i] = static_cast<std::uint16_t>(  // rounded: the value is >= 0
+            std::clamp(1.0 - p, 0.0, 1.0) * (1 << kValidBits) + 0.5);
         // A disparity that noise (truncated at 3.5σ) and mixing cannot bring into range never
         // gives depth: skip its draws (not with a time-varying offset, which has no bound).
         const double reach_px = 3.6 * sigma_px_ + std::fabs(mix_delta_px_[i]);
@@ -348,9 +358,9 @@ inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
     d += mix * m.mix_delta[pixel];
   }
   const float x = d * m.inv_step + 0.5f;
-  // Valid and within [min, max] depth; counts_of_k[0] = 0 stands for "no depth".
-  const bool ok =
-      (uniform_valid < m.valid_threshold[pixel]) & (x >= m.k_min) & (x < m.k_end);
+  // Valid and within [min, max] depth; counts_of_k[0] = 0 stands for "no depth". (Branch-free
+  // forms of this select measured slower here than the branch.)
+  const bool ok = (uniform_valid < m.valid_threshold[pixel]) & (x >= m.k_min) & (x < m.k_end);
   return m.counts_of_k[ok ? static_cast<int>(x) : 0];
 }
 
@@ -373,24 +383,30 @@ void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) 
                   gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
                   sigma_f_};
   std::uint16_t* const counts = frame->counts.data();
-  auto rows = [&, counts](auto mixing, int v_begin, int v_end) {
+  const std::uint64_t seed = truth_.cell_seed;
+  // Pixels go by pairs of draws (counters 2j, 2j + 1) that share one hash. A pixel that never
+  // gives depth has a valid threshold of 0 and draws counts_of_k[0] = 0.
+  auto rows = [&, counts, seed](auto mixing, int v_begin, int v_end) {
+    constexpr bool kMix = decltype(mixing)::value;
+    const Maps m = maps;  // a local copy the compiler keeps in registers
+    const int w = window_.width;
+    auto one = [&](std::uint16_t* row, int base, std::uint64_t counter, int u) {
+      const std::uint64_t c = counter + static_cast<std::uint64_t>(u);
+      row[u] = Draw<kMix>(m, HalfOf(Mix64(seed + (c >> 1) * kGolden), c), base + u);
+    };
     for (int v = v_begin; v < v_end; ++v) {
-      std::uint16_t* row = counts + static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
-      const int base = v * window_.width;
+      std::uint16_t* const row =
+          counts + static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
+      const int base = v * w;
       const std::uint64_t counter = Counter(frame_index, base);
-      std::uint64_t pair = ~0ULL, hash = 0;
-      for (int u = 0; u < window_.width; ++u) {
-        if (!maps.valid_threshold[base + u]) {  // never gives depth
-          row[u] = 0;
-          continue;
-        }
-        const std::uint64_t c = counter + static_cast<std::uint64_t>(u);
-        if ((c >> 1) != pair) {
-          pair = c >> 1;
-          hash = PairHash(c);
-        }
-        row[u] = Draw<decltype(mixing)::value>(maps, HalfOf(hash, c), base + u);
+      int u = 0;
+      if (counter & 1 && w > 0) one(row, base, counter, u++);
+      for (; u + 1 < w; u += 2) {
+        const std::uint64_t hash = Mix64(seed + ((counter + u) >> 1) * kGolden);
+        row[u] = Draw<kMix>(m, static_cast<std::uint32_t>(hash), base + u);
+        row[u + 1] = Draw<kMix>(m, static_cast<std::uint32_t>(hash >> 32), base + u + 1);
       }
+      if (u < w) one(row, base, counter, u);
     }
   };
   if (mixing_)

@@ -107,6 +107,32 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
   EXPECT_NE(err.find("protocol.yaml: protocol.distance_is"), std::string::npos) << err;
 }
 
+// Recordings are simulated several at a time, and a recording's frames on several threads when
+// there are more threads than recordings: the bags must not depend on either.
+TEST(SimulateApp, BagsDoNotDependOnThreads) {
+  const fs::path d = Dir("threads");
+  const fs::path protocol = d / "protocol.yaml";
+  Write(protocol,
+        "protocol: {distances_m: [4, 12], angles_deg: [0, 20], lights: [daylight], "
+        "presets: [HD], emitters: [\"on\"], frames: 3}\n");
+  std::map<int, std::map<std::string, std::string>> bags;  // threads → bag name → bytes
+  for (int threads : {1, 2, 8}) {
+    const fs::path out = d / ("t" + std::to_string(threads));
+    const std::string sim = Bin("simulate") + " --protocol " + protocol.string() +
+                            " --sensor builtin --threads " + std::to_string(threads) +
+                            " --out-dir " + out.string();
+    ASSERT_EQ(RunCommand(sim, d), 0) << Read(d / "stderr.txt");
+    for (const auto& e : fs::directory_iterator(out))
+      bags[threads][e.path().filename().string()] = Read(e.path());
+  }
+  ASSERT_EQ(bags[1].size(), 5u);  // 4 bags and the manifest
+  for (const auto& [name, bytes] : bags[1]) {
+    EXPECT_GT(bytes.size(), 0u) << name;
+    EXPECT_TRUE(bags[2][name] == bytes) << name << " differs with 2 threads";
+    EXPECT_TRUE(bags[8][name] == bytes) << name << " differs with 8 threads";
+  }
+}
+
 // Per scenario: 32 recordings (4 distances × 4 angles × emitter off/on) written as bags, measured
 // by panel_extract, and compared with the metrics-only path. The sensor has the article's range
 // of hole rates (to 95% holes: sunset HA) with noise at which the panel is found at 16 m.
