@@ -4,7 +4,9 @@
 //       range, angle and hole rate)
 //   simulate --protocol P --metrics-only --out metrics.csv [...]   the fast metrics-only path
 //   simulate --protocol P --calibrate-to real.csv --out sensor.yaml [...]   fit σ_d and holes
-// --sensor F (or "builtin") overrides the protocol's sensor file; --margin-px M the region margin;
+// --sensor F (or "builtin") overrides the protocol's sensor file; --sensor-from BAG then takes the
+// depth intrinsics, depth units and Stereo_Baseline of a real recording; --margin-px M the region
+// margin;
 // --threads N recordings simulated in parallel (default: all cores; results do not depend on it).
 #include <atomic>
 #include <cmath>
@@ -155,10 +157,25 @@ void Calibrate(const sim::SimParams& params, const std::string& real_csv,
                sim::CalibrationYaml(r, io::BaseName(real_csv))));
 }
 
+// The camera of a real recording: its depth intrinsics (rectified: distortion is dropped, with a
+// warning if the recording has any), depth units and Stereo_Baseline.
+void SensorFromRecording(const std::string& bag, sim::SensorParams* sensor) {
+  const io::BagReader reader(bag);
+  const io::BagInfo& info = reader.info();
+  if (!info.has_depth_intrinsics) throw Fail(bag + ": no camera_info for the depth stream");
+  for (double c : info.depth_intrinsics.coeffs)
+    if (c != 0) {
+      std::cerr << "simulate: " << bag
+                << ": distortion coefficients ignored (the simulated stream is rectified)\n";
+      break;
+    }
+  sim::ApplyRecording(info.depth_intrinsics, info.depth_units_m, info.options, sensor);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string protocol_file, sensor_file, effects_file, out_dir, out, calibrate_to;
+  std::string protocol_file, sensor_file, sensor_bag, effects_file, out_dir, out, calibrate_to;
   bool metrics_only = false;
   int frames = 0;
   sim::MetricsParams mp;
@@ -173,6 +190,7 @@ int main(int argc, char** argv) {
       };
       if (a == "--protocol") protocol_file = value();
       else if (a == "--sensor") sensor_file = value();
+      else if (a == "--sensor-from") sensor_bag = value();
       else if (a == "--effects") effects_file = value();
       else if (a == "--out-dir") out_dir = value();
       else if (a == "--out") out = value();
@@ -197,6 +215,7 @@ int main(int argc, char** argv) {
     if (!sensor_file.empty() && sensor_file != "builtin" &&
         !sim::ParseSensorYaml(io::ReadFile(sensor_file), &params.sensor, &why))
       throw Fail(sensor_file + ": " + why);
+    if (!sensor_bag.empty()) SensorFromRecording(sensor_bag, &params.sensor);
     if (!effects_file.empty()) {
       std::vector<sim::EffectSpec> effects;
       if (!sim::ParseEffectsYaml(io::ReadFile(effects_file), &effects, &why) ||

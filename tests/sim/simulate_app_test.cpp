@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "io/bag.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
 
@@ -131,6 +132,52 @@ TEST(SimulateApp, BagsDoNotDependOnThreads) {
     EXPECT_TRUE(bags[2][name] == bytes) << name << " differs with 2 threads";
     EXPECT_TRUE(bags[8][name] == bytes) << name << " differs with 8 threads";
   }
+}
+
+// The simulated camera takes a real recording's intrinsics, depth units and baseline (the fixture
+// was written by librealsense's recorder: 64×48, fx 40, Stereo_Baseline 95.07 mm, distorted).
+TEST(SimulateApp, SensorFromRecordingTakesItsCamera) {
+  const fs::path d = Dir("sensor_from");
+  const fs::path protocol = d / "protocol.yaml";
+  Write(protocol,
+        "protocol: {distances_m: [4], angles_deg: [0], lights: [daylight], presets: [HA], "
+        "emitters: [\"off\"], frames: 2}\n");
+  const std::string recording = DEPTHBIAS_TEST_DATA "/bags/d455_depth_1mm.bag";
+  std::string err;
+  ASSERT_EQ(RunCommand(Bin("simulate") + " --protocol " + protocol.string() +
+                           " --sensor builtin --sensor-from " + recording + " --out-dir " +
+                           (d / "bags").string(),
+                       d, &err),
+            0)
+      << err;
+  EXPECT_NE(err.find("distortion coefficients ignored"), std::string::npos) << err;
+  std::vector<fs::path> bags;
+  for (const auto& e : fs::directory_iterator(d / "bags"))
+    if (e.path().extension() == ".bag") bags.push_back(e.path());
+  ASSERT_EQ(bags.size(), 1u);
+  io::BagReader reader(bags[0].string());
+  const io::BagInfo& info = reader.info();
+  EXPECT_EQ(info.depth_intrinsics.width, 64);
+  EXPECT_EQ(info.depth_intrinsics.height, 48);
+  EXPECT_NEAR(info.depth_intrinsics.fx, 40.0, 1e-6);
+  EXPECT_NEAR(info.depth_intrinsics.fy, 40.12, 1e-5);
+  EXPECT_NEAR(info.depth_intrinsics.ppx, 31.63, 1e-5);
+  for (double c : info.depth_intrinsics.coeffs) EXPECT_EQ(c, 0.0);
+  EXPECT_NEAR(info.depth_units_m, 0.001, 1e-9);
+  EXPECT_NEAR(info.options.at("Stereo_Baseline"), 95.07, 1e-3);
+  camera::DepthFrame frame;
+  ASSERT_TRUE(reader.Next(&frame));
+  EXPECT_EQ(frame.counts.size(), 64u * 48u);
+
+  const fs::path not_a_bag = d / "notes.bag";
+  Write(not_a_bag, "not a bag\n");
+  ASSERT_EQ(RunCommand(Bin("simulate") + " --protocol " + protocol.string() + " --sensor-from " +
+                           not_a_bag.string() + " --out-dir " + (d / "bags2").string(),
+                       d, &err),
+            1);
+  EXPECT_NE(err.find("notes.bag"), std::string::npos) << err;
+  EXPECT_EQ(err.find('\n'), err.size() - 1) << err;  // one line
+  EXPECT_FALSE(fs::exists(d / "bags2" / "manifest.csv"));
 }
 
 // Per scenario: 32 recordings (4 distances × 4 angles × emitter off/on) written as bags, measured
