@@ -16,8 +16,8 @@
 
 namespace {
 
-void Usage() {
-  std::cerr << "usage: bag_info FILE... [--json] [--read-all] [--partial]\n"
+void Usage(std::ostream& out) {
+  out << "usage: bag_info FILE... [--json] [--read-all] [--partial]\n"
                "  --json      one JSON object per bag, one per line\n"
                "  --partial   read a damaged bag up to the damage\n"
                "  --read-all  decode every depth frame and print frames/s\n";
@@ -37,18 +37,17 @@ int main(int argc, char** argv) {
     } else if (a == "--partial") {
       partial = true;
     } else if (a == "-h" || a == "--help") {
-      Usage();
+      Usage(std::cout);
       return 0;
     } else if (a.size() > 1 && a[0] == '-') {
-      std::cerr << "bag_info: unknown option " << a << "\n";
-      Usage();
+      std::cerr << "bag_info: unknown option " << a << " (see bag_info --help)\n";
       return 2;
     } else {
       files.push_back(a);
     }
   }
   if (files.empty()) {
-    Usage();
+    Usage(std::cerr);
     return 2;
   }
   int failures = 0;

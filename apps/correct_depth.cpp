@@ -15,6 +15,12 @@
 
 namespace {
 
+constexpr char kUsage[] =
+    "usage: correct_depth --weights weights.yaml --in metrics.csv --out corrected.csv [--k 2]\n"
+    "Adds per row predicted_bias_m, corrected_m, predictive_std_m, margin_m (corrected_m minus\n"
+    "k predictive standard deviations: a distance the target is not nearer than) and\n"
+    "residual_m (corrected_m minus distance_m).\n";
+
 int Fail(const std::string& what) {
   std::cerr << "correct_depth: " << what << "\n";
   return 1;
@@ -28,6 +34,10 @@ int main(int argc, char** argv) {
   double k = 2.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::cout << kUsage;
+      return 0;
+    }
     if (i + 1 >= argc) return Fail("bad arguments: " + a + " needs a value");
     const std::string v = argv[++i];
     if (a == "--weights") weights_path = v;
@@ -40,7 +50,7 @@ int main(int argc, char** argv) {
         return Fail("bad arguments: --k '" + v + "' is not a number");
       }
     } else {
-      return Fail("bad arguments: unknown argument '" + a + "'");
+      return Fail("bad arguments: unknown argument '" + a + "' (see correct_depth --help)");
     }
   }
   if (weights_path.empty() || in.empty() || out.empty()) {

@@ -24,6 +24,16 @@ namespace {
 
 using namespace depthbias;
 
+constexpr char kUsage[] =
+    "usage: fit_bias --in metrics.csv --out weights.yaml\n"
+    "         [--model disp_knots|disp_tan|disp_scale|paper6] [--lambda 0.001]\n"
+    "         [--loss auto|none|huber|cauchy|soft_l1] [--loss-scale 1.0]\n"
+    "         [--group-by light,preset] [--cv point,distance|point|distance|none]\n"
+    "         [--weight-valid] [--focal-px 640] [--baseline-m 0.095]\n"
+    "         [--prior name=mean:strength] [--nested] [--cv-out heldout.csv]\n"
+    "Fits the bias model per (light, preset) with Ceres and an L2 prior, cross-validated;\n"
+    "writes the weights YAML and prints a table. --nested also judges the choice of model.\n";
+
 std::vector<std::string> Split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
@@ -54,6 +64,10 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
+      if (a == "--help" || a == "-h") {
+        std::fputs(kUsage, stdout);
+        return 0;
+      }
       auto value = [&]() -> std::string {
         if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
         return argv[++i];
@@ -89,7 +103,7 @@ int main(int argc, char** argv) {
                                      ToDouble("--prior", v.substr(eq + 1, colon - eq - 1)),
                                      ToDouble("--prior", v.substr(colon + 1))});
       } else {
-        throw std::invalid_argument("unknown argument '" + a + "'");
+        throw std::invalid_argument("unknown argument '" + a + "' (see fit_bias --help)");
       }
     }
   } catch (const std::exception& e) {

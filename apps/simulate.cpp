@@ -30,6 +30,15 @@ namespace {
 using namespace depthbias;
 namespace fs = std::filesystem;
 
+constexpr char kUsage[] =
+    "usage: simulate --protocol P.yaml --out-dir DIR            bags + DIR/manifest.csv\n"
+    "       simulate --protocol P.yaml --metrics-only --out metrics.csv\n"
+    "       simulate --protocol P.yaml --calibrate-to real.csv --out sensor.yaml\n"
+    "  [--frames N] [--seed S] [--effects effects.yaml] [--sensor sensor.yaml|builtin]\n"
+    "  [--sensor-from real.bag] [--margin-px M] [--threads N]\n"
+    "Simulates the D455 on a protocol: RealSense bags with their ground truth, the panel\n"
+    "metrics directly (fast path), or the base sensor calibrated to a real metrics table.\n";
+
 struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -184,6 +193,10 @@ int main(int argc, char** argv) {
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
+      if (a == "--help" || a == "-h") {
+        std::fputs(kUsage, stdout);
+        return 0;
+      }
       auto value = [&]() -> std::string {
         if (i + 1 >= argc) throw Fail(a + " needs a value");
         return argv[++i];
@@ -200,7 +213,7 @@ int main(int argc, char** argv) {
       else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Parse(a, value(), true, 0));
       else if (a == "--margin-px") mp.region_margin_px = Parse(a, value(), false, 0);
       else if (a == "--threads") mp.threads = static_cast<int>(Parse(a, value(), true, 1));
-      else throw Fail("unknown argument '" + a + "' (see the header of apps/simulate.cpp)");
+      else throw Fail("unknown argument '" + a + "' (see simulate --help)");
     }
     if (protocol_file.empty()) throw Fail("--protocol FILE is required");
     if ((out_dir.empty() ? 0 : 1) + metrics_only + !calibrate_to.empty() != 1)

@@ -58,6 +58,16 @@ void ExpectCleanFailure(const AppRun& r, const fs::path& out, const std::string&
   EXPECT_FALSE(fs::exists(out)) << out;
 }
 
+// Every app says how it is used on --help, on stdout, and exits 0.
+TEST(Apps, HelpPrintsUsage) {
+  const fs::path d = Dir();
+  for (const char* app : {"bag_info", "panel_extract", "fit_bias", "correct_depth", "simulate"}) {
+    const AppRun r = Exec(app, "--help", d);
+    EXPECT_EQ(r.code, 0) << app << ": " << r.err;
+    EXPECT_EQ(r.out.rfind(std::string("usage: ") + app, 0), 0u) << app << ": " << r.out;
+  }
+}
+
 TEST(FitBiasApp, ReproducesTable6OnTheArticlesData) {
   const auto dir = Dir();
   const auto out = dir / "w.yaml";
