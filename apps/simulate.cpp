@@ -1,20 +1,11 @@
-// simulate: the simulated D455 on a protocol (lib/sim). Three uses:
-//   simulate --protocol P --out-dir DIR [--frames N] [--seed S] [--effects F] [--sensor F]
-//       one RealSense-layout bag per recording + DIR/manifest.csv (with the true panel depth,
-//       range, angle and hole rate)
-//   simulate --protocol P --metrics-only --out metrics.csv [...]   the fast metrics-only path
-//   simulate --protocol P --calibrate-to real.csv --out sensor.yaml [...]   fit σ_d and holes
-// --sensor F (or "builtin") overrides the protocol's sensor file; --sensor-from BAG then takes the
-// depth intrinsics, depth units and Stereo_Baseline of a real recording; --margin-px M the region
-// margin;
-// --threads N recordings simulated in parallel (default: all cores; results do not depend on it).
-#include <atomic>
+// simulate: the simulated D455 on a protocol (lib/sim): bags and their manifest, the metrics-only
+// table, or the base sensor calibrated to a real table (see kUsage). --threads N: recordings
+// simulated in parallel (default: all cores; results do not depend on it).
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <future>
 #include <iostream>
-#include <mutex>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -24,6 +15,7 @@
 #include "io/metrics_csv.h"
 #include "sim/calibrate.h"
 #include "sim/config_yaml.h"
+#include "sim/render_protocol.h"
 
 namespace {
 
@@ -37,7 +29,9 @@ constexpr char kUsage[] =
     "  [--frames N] [--seed S] [--effects effects.yaml] [--sensor sensor.yaml|builtin]\n"
     "  [--sensor-from real.bag] [--margin-px M] [--threads N]\n"
     "Simulates the D455 on a protocol: RealSense bags with their ground truth, the panel\n"
-    "metrics directly (fast path), or the base sensor calibrated to a real metrics table.\n";
+    "metrics directly (fast path), or the base sensor calibrated to a real metrics table.\n"
+    "--sensor overrides the protocol's sensor file; --sensor-from then takes a recording's\n"
+    "depth intrinsics, depth units and Stereo_Baseline.\n";
 
 struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -65,84 +59,42 @@ std::string Fixed(double v, int digits) {
   return buf;
 }
 
-// One recording: its bag in dir, and its manifest row. `threads` threads render its frames; with
-// two or more, frame k + 1 is rendered while frame k is written.
-io::ManifestRow WriteRecording(const sim::SimParams& params, const sim::Cell& cell,
-                               const sim::MetricsParams& metrics, const std::string& dir,
-                               int threads) {
-  const sim::StereoSim simulator(params, cell, threads);
-  io::BagWriterConfig config;
-  config.intrinsics = params.sensor.intrinsics;
-  config.depth_units_m = params.sensor.depth_units_m;
-  config.fps = params.protocol.fps;
-  sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
-  config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
-  config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
-  config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
-  const std::string bag = cell.name + ".bag";
-  io::BagWriter writer((fs::path(dir) / bag).string(), config);  // renamed into place on Close
-  camera::DepthFrame frames[2];
-  const int n = params.protocol.frames;
-  if (threads < 2) {
-    for (int k = 0; k < n; ++k) {
-      simulator.Render(k, &frames[0]);
-      writer.Write(frames[0]);
-    }
-  } else {
-    simulator.Render(0, &frames[0], threads);
-    for (int k = 0; k < n; ++k) {
-      std::future<void> next;
-      if (k + 1 < n)
-        next = std::async(std::launch::async,
-                          [&, k] { simulator.Render(k + 1, &frames[(k + 1) % 2], threads); });
-      writer.Write(frames[k % 2]);
-      if (next.valid()) next.get();
-    }
-  }
-  writer.Close();
-  const sim::CellMetricsResult truth = sim::SimulateMetrics(params, cell, metrics);
-  io::ManifestRow row;
-  row.bag = bag;
-  row.distance_m = cell.distance_m;
-  row.angle_deg = cell.angle_deg;
-  row.light = cell.light;
-  row.preset = cell.preset;
-  row.emitter = cell.emitter_on ? "on" : "off";
-  row.extras = {{"true_depth_m", Fixed(truth.truth.panel_depth_m, 6)},
-                {"true_range_m", Fixed(truth.truth.panel_range_m, 6)},
-                {"true_angle_deg", Fixed(truth.truth.panel_angle_deg, 4)},
-                {"true_hole_rate_pct", Fixed(truth.metrics.hole_rate_pct, 3)}};
-  return row;
-}
-
-// Every recording of the protocol, metrics.threads at a time (each on one thread when there are
-// enough recordings to keep the cores busy), then DIR/manifest.csv. The first error stops the run.
+// Every recording of the protocol as a bag in dir (renamed into place when complete), then
+// DIR/manifest.csv with each recording's truth. The first error stops the run.
 void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
                      const std::string& dir) {
   fs::create_directories(dir);
-  const std::vector<sim::Cell> cells = sim::MakeCells(params.protocol);
-  std::vector<io::ManifestRow> rows(cells.size());
-  const int workers = std::max(1, std::min<int>(metrics.threads, static_cast<int>(cells.size())));
-  const int per_cell = std::max(1, metrics.threads / workers);
-  std::atomic<size_t> next{0};
-  std::mutex error_mutex;
-  std::string error;
-  auto work = [&] {
-    for (size_t i; (i = next++) < cells.size();) {
-      try {
-        rows[i] = WriteRecording(params, cells[i], metrics, dir, per_cell);
-      } catch (const std::exception& e) {
-        std::lock_guard<std::mutex> lock(error_mutex);
-        if (error.empty()) error = e.what();
-        next = cells.size();
-      }
-    }
+  auto open = [&](const sim::Cell& cell) {
+    io::BagWriterConfig config;
+    config.intrinsics = params.sensor.intrinsics;
+    config.depth_units_m = params.sensor.depth_units_m;
+    config.fps = params.protocol.fps;
+    sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
+    config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
+    config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
+    config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
+    const auto writer =
+        std::make_shared<io::BagWriter>((fs::path(dir) / (cell.name + ".bag")).string(), config);
+    return sim::RecordingOutput{[writer](const camera::DepthFrame& f) { writer->Write(f); },
+                                [writer] { writer->Close(); }};
   };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < workers; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (!error.empty()) throw Fail(error);
+  std::vector<io::ManifestRow> rows;
+  for (const sim::RenderedRecording& r :
+       sim::RenderProtocol(params, metrics, metrics.threads, open)) {
+    io::ManifestRow row;
+    row.bag = r.cell.name + ".bag";
+    row.distance_m = r.cell.distance_m;
+    row.angle_deg = r.cell.angle_deg;
+    row.light = r.cell.light;
+    row.preset = r.cell.preset;
+    row.emitter = r.cell.emitter_on ? "on" : "off";
+    const sim::CellTruth& truth = r.truth.truth;
+    row.extras = {{"true_depth_m", Fixed(truth.panel_depth_m, 6)},
+                  {"true_range_m", Fixed(truth.panel_range_m, 6)},
+                  {"true_angle_deg", Fixed(truth.panel_angle_deg, 4)},
+                  {"true_hole_rate_pct", Fixed(r.truth.metrics.hole_rate_pct, 3)}};
+    rows.push_back(row);
+  }
   io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
                     {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
   std::printf("simulate: %zu recordings of %d frames in %s\n", rows.size(),

@@ -125,7 +125,8 @@ struct BagWriterConfig {
 
 // Writes a depth-only bag in the layout librealsense's recorder writes and its playback reads
 // (device 0, sensor 0 "Stereo Module", stream Depth_0, mono16). Each frame keeps its own depth
-// units, number and device timestamp. The bag is written to PATH.part and renamed at Close().
+// units, number and device timestamp. The bag is written to PATH.part and renamed at Close();
+// a writer destroyed without Close() (an error unwound past it) removes PATH.part.
 class BagWriter {
  public:
   BagWriter(const std::string& path, BagWriterConfig config);  // throws BagError
@@ -134,7 +135,7 @@ class BagWriter {
   BagWriter& operator=(const BagWriter&) = delete;
 
   void Write(const camera::DepthFrame& frame);  // throws BagError
-  void Close();                                 // also called by the destructor
+  void Close();                                 // throws BagError
 
  private:
   struct Impl;

@@ -271,11 +271,17 @@ BagWriter::BagWriter(const std::string& path, BagWriterConfig config) : impl_(ne
 }
 
 BagWriter::~BagWriter() {
+  // Never closed: the recording was abandoned (an error unwound past it). Its partial file goes,
+  // so that no bag with frames missing takes the final name.
+  Impl& d = *impl_;
+  if (!d.open) return;
+  d.open = false;
   try {
-    Close();
-  } catch (const BagError&) {
-    // Close() already removed the partial file; a destructor must not throw.
+    d.bag.Close();
+  } catch (const std::exception&) {
+    // the file is removed below either way; a destructor must not throw
   }
+  std::remove(d.temp_path.c_str());
 }
 
 void BagWriter::Write(const camera::DepthFrame& frame) {

@@ -2,16 +2,13 @@
 // evaluated on the panel's image footprint alone.
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
-#include <mutex>
 #include <stdexcept>
-#include <thread>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "sim/parallel.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {
@@ -243,25 +240,8 @@ std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
                                                     const std::vector<Cell>& cells,
                                                     const MetricsParams& metrics) {
   std::vector<CellMetricsResult> out(cells.size());
-  const int threads = std::max(1, std::min<int>(metrics.threads, static_cast<int>(cells.size())));
-  std::atomic<size_t> next{0};
-  std::exception_ptr error;
-  std::mutex error_mutex;
-  auto work = [&] {
-    try {
-      for (size_t i = next++; i < cells.size(); i = next++)
-        out[i] = SimulateMetrics(params, cells[i], metrics);
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(error_mutex);
-      if (!error) error = std::current_exception();
-      next = cells.size();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  if (error) std::rethrow_exception(error);
+  detail::ForEachIndex(cells.size(), metrics.threads,
+                       [&](size_t i) { out[i] = SimulateMetrics(params, cells[i], metrics); });
   return out;
 }
 

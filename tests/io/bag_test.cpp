@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <stdexcept>
 #include <fstream>
 #include <map>
 #include <random>
@@ -412,6 +413,7 @@ TEST(BagWriter, FramesWithoutTheirOwnUnitsUseTheDepthUnitsOption) {
   {
     BagWriter writer(path, TestConfig(64, 48, false, 0.001));  // Depth_Units option: 0.001
     for (int i = 0; i < 3; ++i) writer.Write(TestFrame(64, 48, i, 0.0001));  // frames: 0.0001
+    writer.Close();
   }
   {
     BagReader reader(path);
@@ -434,6 +436,22 @@ TEST(BagWriter, FramesWithoutTheirOwnUnitsUseTheDepthUnitsOption) {
     EXPECT_EQ(f.counts, TestFrame(64, 48, n, 0.0001).counts);
   }
   EXPECT_EQ(n, 3);
+}
+
+// A recording abandoned by an error (the writer destroyed without Close) leaves no file, neither
+// under its name nor as PATH.part.
+TEST(BagWriter, AnAbandonedRecordingLeavesNoFile) {
+  TempDir dir;
+  const std::string path = dir.File("abandoned.bag");
+  try {
+    BagWriter writer(path, TestConfig(64, 48, false, 0.001));
+    writer.Write(TestFrame(64, 48, 0, 0.001));
+    ASSERT_TRUE(std::filesystem::exists(path + ".part"));
+    throw std::runtime_error("render failed");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
 }
 
 TEST(BagWriter, RefusesFramesOfAnotherSizeAndBadConfig) {

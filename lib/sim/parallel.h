@@ -1,0 +1,37 @@
+#pragma once
+// Runs f(i) for i in [0, n) on up to `threads` threads, each taking the next index. The first
+// exception stops the hand-out of indices and is rethrown once every thread has finished.
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace depthbias::sim::detail {
+
+template <typename F>
+void ForEachIndex(std::size_t n, int threads, F f) {
+  threads = std::max(1, static_cast<int>(std::min<std::size_t>(std::max(threads, 1), n)));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    try {
+      for (std::size_t i = next++; i < n; i = next++) f(i);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      next = n;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace depthbias::sim::detail
