@@ -112,8 +112,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   }
   std::vector<int> n_t(np, 0);
   std::vector<double> se(np, 0.0), se2(np, 0.0), sa(np, 0.0), sa2(np, 0.0);
-  std::vector<std::uint16_t> pooled;  // every valid sample's depth counts, for the median
-  pooled.reserve(np * static_cast<size_t>(frames) / 2);
+  std::vector<std::uint32_t> histogram(65536, 0);  // of every valid sample's depth counts
   std::vector<std::uint16_t> counts;
   int frames_with_depth = 0;
   size_t n = 0;
@@ -125,7 +124,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
       const std::uint16_t c = counts[i];
       if (!c) continue;
       any = true;
-      pooled.push_back(c);
+      ++histogram[c];
       const double z = c * s.depth_units_m;
       const double e = z - z_true[i];
       const double a = fb / z - d_true[i];
@@ -150,14 +149,16 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   }
   m.mean_m = sum_z / n;
   {
-    // Median of the pooled depths (the mean of the two middle ones for an even count).
-    const size_t hi_rank = n / 2;
-    std::nth_element(pooled.begin(), pooled.begin() + hi_rank, pooled.end());
-    const double hi = pooled[hi_rank] * s.depth_units_m;
-    const double lo = n % 2 ? hi
-                            : *std::max_element(pooled.begin(), pooled.begin() + hi_rank) *
-                                  s.depth_units_m;
-    m.median_m = 0.5 * (lo + hi);
+    // Median of the pooled depths (the mean of the two middle ones for an even count): the
+    // samples of ranks n/2 and (n − 1)/2 (from 0), read off the histogram.
+    auto at_rank = [&](size_t rank) {
+      size_t below = 0;
+      for (size_t c = 0;; ++c) {
+        below += histogram[c];
+        if (below > rank) return c * s.depth_units_m;
+      }
+    };
+    m.median_m = 0.5 * (at_rank((n - 1) / 2) + at_rank(n / 2));
   }
 
   // The plane fitted to the points (least squares: the eigenvector of the smallest eigenvalue of
