@@ -37,7 +37,8 @@ struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// A flag's number: whole numbers >= min_value when whole, else any finite number.
+// A flag's number: a whole number in [min_value, 2^31 − 1] when whole, else any finite number
+// >= min_value.
 double Parse(const std::string& flag, const std::string& text, bool whole, double min_value) {
   size_t used = 0;
   double v = 0;
@@ -47,9 +48,10 @@ double Parse(const std::string& flag, const std::string& text, bool whole, doubl
     used = 0;
   }
   if (used == 0 || used != text.size() || !std::isfinite(v) || v < min_value ||
-      (whole && v != std::floor(v)))
+      (whole && (v != std::floor(v) || v > 2147483647.0)))
     throw Fail(flag + " '" + text + "' is not a " + (whole ? "whole " : "") + "number >= " +
-               std::to_string(static_cast<long long>(min_value)));
+               std::to_string(static_cast<long long>(min_value)) +
+               (whole ? " and < 2^31" : ""));
   return v;
 }
 

@@ -1,5 +1,6 @@
 #include "sim/config_yaml.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <set>
@@ -322,8 +323,13 @@ std::string FormatSensorYaml(const SensorParams& s, const std::vector<std::strin
 void ApplyRecording(const camera::Intrinsics& intrinsics, double depth_units_m,
                     const std::map<std::string, double>& options, SensorParams* sensor) {
   sensor->intrinsics = intrinsics;
+  sensor->intrinsics.model = camera::Distortion::kNone;
   sensor->intrinsics.coeffs = {0, 0, 0, 0, 0};
-  if (depth_units_m > 0) sensor->depth_units_m = depth_units_m;
+  if (depth_units_m > 0) {
+    sensor->depth_units_m = depth_units_m;
+    // The camera's own range at these units: 16-bit counts.
+    sensor->max_depth_m = std::min(sensor->max_depth_m, 65535 * depth_units_m);
+  }
   const auto baseline = options.find("Stereo_Baseline");
   if (baseline != options.end() && baseline->second > 0)
     sensor->baseline_m = baseline->second / 1000.0;

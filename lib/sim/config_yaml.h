@@ -36,8 +36,9 @@ std::string FormatSensorYaml(const SensorParams& sensor, const std::vector<std::
                              const std::string& extra_yaml = "");
 
 // Takes what a recording says about its camera: depth intrinsics (treated as rectified: the
-// D455 depth stream reports zero distortion), depth units, and the Stereo_Baseline option
-// (millimetres, as librealsense records it) when present.
+// D455 depth stream reports zero distortion; the model becomes none), depth units (the maximum
+// depth is capped to what 16-bit counts hold at them, as on the camera), and the
+// Stereo_Baseline option (millimetres, as librealsense records it) when present.
 void ApplyRecording(const camera::Intrinsics& intrinsics, double depth_units_m,
                     const std::map<std::string, double>& options, SensorParams* sensor);
 

@@ -28,8 +28,10 @@ struct RenderedRecording {
 // The protocol's recordings, in MakeCells' order. `threads` threads share the recordings; with
 // more threads than recordings, a recording renders its frames on several threads, frame k + 1
 // while frame k is written. The frames do not depend on the threads. An exception from
-// rendering, open, write or close stops the run and is rethrown (outputs already opened are
-// the caller's to clean up).
+// rendering, open, write or close stops the run: recordings under way stop between two frames
+// without their close being called (their outputs are dropped unclosed: the app's bag writers
+// then remove their partial files), and the first exception is rethrown. Recordings finished
+// before it stay closed.
 std::vector<RenderedRecording> RenderProtocol(const SimParams& params,
                                               const MetricsParams& metrics, int threads,
                                               const OpenRecording& open);

@@ -1,6 +1,7 @@
 #include "sim/sensor.h"
 
 #include <cmath>
+#include <cstdio>
 
 namespace depthbias::sim {
 namespace {
@@ -19,6 +20,12 @@ bool ScenarioValid(const ScenarioParams& s, std::string* why) {
   return true;
 }
 
+std::string Number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
 }  // namespace
 
 bool SensorParams::IsValid(std::string* why) const {
@@ -31,10 +38,10 @@ bool SensorParams::IsValid(std::string* why) const {
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m))
     return Fail(why, "need 0 < min_depth_m < max_depth_m");
   if (max_depth_m / depth_units_m > 65535)
-    return Fail(why, "max_depth_m " + std::to_string(max_depth_m) +
+    return Fail(why, "max_depth_m " + Number(max_depth_m) +
                          " does not fit 16-bit counts at depth units of " +
-                         std::to_string(depth_units_m) + " m (at most " +
-                         std::to_string(65535 * depth_units_m) + " m)");
+                         Number(depth_units_m) + " m (at most " +
+                         Number(65535 * depth_units_m) + " m)");
   if (focal_px() * baseline_m / min_depth_m / subpixel_step_px > 1e6)
     return Fail(why, "min_depth_m too small for the subpixel step (disparity table too big)");
   if (!(texture_slope >= 0)) return Fail(why, "texture_slope must be >= 0");

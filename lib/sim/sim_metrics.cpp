@@ -112,7 +112,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   }
   std::vector<int> n_t(np, 0);
   std::vector<double> se(np, 0.0), se2(np, 0.0), sa(np, 0.0), sa2(np, 0.0);
-  std::vector<std::uint32_t> histogram(65536, 0);  // of every valid sample's depth counts
+  std::vector<std::uint64_t> histogram(65536, 0);  // of every valid sample's depth counts
   std::vector<std::uint16_t> counts;
   int frames_with_depth = 0;
   size_t n = 0;

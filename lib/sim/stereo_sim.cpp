@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 #include <type_traits>
 
@@ -27,8 +28,13 @@ template <typename F>
 void ForRows(int rows, int threads, F f) {
   threads = std::clamp(threads, 1, 16);
   std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t)
-    pool.emplace_back(f, rows * t / threads, rows * (t + 1) / threads);
+  for (int t = 1; t < threads; ++t) {
+    try {
+      pool.emplace_back(f, rows * t / threads, rows * (t + 1) / threads);
+    } catch (const std::system_error&) {  // no thread to be had: this one takes the band
+      f(rows * t / threads, rows * (t + 1) / threads);
+    }
+  }
   f(0, rows / threads);
   for (auto& t : pool) t.join();
 }

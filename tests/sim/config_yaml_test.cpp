@@ -132,10 +132,14 @@ TEST(ConfigYaml, RecordingOverridesTheCamera) {
   EXPECT_EQ(s.intrinsics.width, 848);
   EXPECT_DOUBLE_EQ(s.depth_units_m, 0.0001);
   EXPECT_DOUBLE_EQ(s.baseline_m, 0.0945);
+  EXPECT_EQ(s.intrinsics.model, camera::Distortion::kNone);
+  // 25 m does not fit 16-bit counts at 0.1 mm: the range is the camera's, 6.5535 m.
+  EXPECT_DOUBLE_EQ(s.max_depth_m, 65535 * 0.0001);
   std::string why;
-  EXPECT_FALSE(s.IsValid(&why));  // 25 m does not fit 16-bit counts at 0.1 mm
-  s.max_depth_m = 6.0;
   EXPECT_TRUE(s.IsValid(&why)) << why;
+  s.max_depth_m = 25;
+  EXPECT_FALSE(s.IsValid(&why));
+  EXPECT_NE(why.find("at most 6.5535 m"), std::string::npos) << why;
 }
 
 }  // namespace

@@ -94,18 +94,22 @@ TEST(RenderProtocol, EveryRecordingInOrderWhateverTheThreads) {
 
 TEST(RenderProtocol, AnOutputErrorStopsTheRunAndIsRethrown) {
   const SimParams p = SmallProtocol();
+  const std::string bad = MakeCells(p.protocol)[1].name;
   for (int threads : {1, 2, 16}) {
-    int opened = 0;
     std::mutex mutex;
+    std::map<std::string, int> opened, closed;
     auto open = [&](const Cell& cell) {
       std::lock_guard<std::mutex> lock(mutex);
-      ++opened;
-      const bool bad = cell.name == MakeCells(p.protocol)[1].name;
-      return RecordingOutput{[bad](const camera::DepthFrame& f) {
-                               if (bad && f.frame_number == 2)
+      ++opened[cell.name];
+      const std::string name = cell.name;
+      return RecordingOutput{[name, &bad](const camera::DepthFrame& f) {
+                               if (name == bad && f.frame_number == 2)
                                  throw std::runtime_error("disk full");
                              },
-                             [] {}};
+                             [&, name] {
+                               std::lock_guard<std::mutex> lock(mutex);
+                               ++closed[name];
+                             }};
     };
     try {
       RenderProtocol(p, MetricsParams{}, threads, open);
@@ -113,8 +117,44 @@ TEST(RenderProtocol, AnOutputErrorStopsTheRunAndIsRethrown) {
     } catch (const std::runtime_error& e) {
       EXPECT_STREQ(e.what(), "disk full");
     }
-    if (threads < 8) {
-      EXPECT_LT(opened, 8) << "threads " << threads;  // the run stopped early
+    EXPECT_EQ(closed.count(bad), 0u) << "threads " << threads;
+    for (const auto& [name, n] : closed) EXPECT_EQ(n, 1) << name;
+    if (threads == 1) {  // one at a time: the first recording done, the second failed, no more
+      EXPECT_EQ(opened.size(), 2u);
+      EXPECT_EQ(closed.size(), 1u);
+    }
+  }
+}
+
+// Pixels go by pairs of draws sharing a hash: rows whose first draw is odd (an odd image width,
+// or a window starting at an odd column) must still draw each pixel as RenderPixels does.
+TEST(RenderProtocol, OddWidthsAndWindowsDrawEveryPixelAsRenderPixels) {
+  SimParams p = SmallProtocol();
+  p.sensor.intrinsics.width = 321;
+  p.sensor.intrinsics.height = 181;
+  p.sensor.fallback.invalid_prob = 0.3;
+  const Cell cell = MakeCells(p.protocol)[0];
+  for (const Window w : {Window{0, 0, 321, 181}, Window{101, 40, 77, 51}}) {
+    const StereoSim sim(p, cell, w);
+    PixelList all;
+    for (int v = 0; v < w.height; ++v)
+      for (int u = 0; u < w.width; ++u) {
+        all.window.push_back(v * w.width + u);
+        all.image.push_back(static_cast<std::uint64_t>(w.v0 + v) * 321 + w.u0 + u);
+      }
+    for (int k : {0, 1}) {
+      camera::DepthFrame frame;
+      sim.Render(k, &frame);
+      std::vector<std::uint16_t> expected;
+      sim.RenderPixels(k, all, &expected);
+      int valid = 0, mismatched = 0;
+      for (size_t i = 0; i < all.size(); ++i) {
+        const std::uint16_t got = frame.counts[all.image[i]];
+        mismatched += got != expected[i];
+        valid += got != 0;
+      }
+      EXPECT_EQ(mismatched, 0) << "window at u0 " << w.u0 << ", frame " << k;
+      EXPECT_GT(valid, 0);
     }
   }
 }

@@ -177,7 +177,27 @@ TEST(SimulateApp, SensorFromRecordingTakesItsCamera) {
             1);
   EXPECT_NE(err.find("notes.bag"), std::string::npos) << err;
   EXPECT_EQ(err.find('\n'), err.size() - 1) << err;  // one line
-  EXPECT_FALSE(fs::exists(d / "bags2" / "manifest.csv"));
+  EXPECT_FALSE(fs::exists(d / "bags2"));
+
+  // A recording at 100 µm units: the simulated range is the camera's at those units (6.55 m).
+  const std::string fine = DEPTHBIAS_TEST_DATA "/bags/d455_depth_100um_lz4.bag";
+  ASSERT_EQ(RunCommand(Bin("simulate") + " --protocol " + protocol.string() +
+                           " --sensor builtin --sensor-from " + fine + " --out-dir " +
+                           (d / "bags3").string(),
+                       d, &err),
+            0)
+      << err;
+  const io::Manifest manifest = io::ReadManifest((d / "bags3" / "manifest.csv").string());
+  ASSERT_EQ(manifest.rows().size(), 1u);
+  io::BagReader fine_reader((d / "bags3" / manifest.rows()[0].bag).string());
+  EXPECT_NEAR(fine_reader.info().depth_units_m, 0.0001, 1e-9);
+  ASSERT_TRUE(fine_reader.Next(&frame));
+  int valid = 0;
+  for (std::uint16_t c : frame.counts) {
+    EXPECT_LE(c * 0.0001, 6.5535 + 1e-9);
+    valid += c != 0;
+  }
+  EXPECT_GT(valid, 0);  // the panel at 4 m is in range
 }
 
 // Per scenario: 32 recordings (4 distances × 4 angles × emitter off/on) written as bags, measured
