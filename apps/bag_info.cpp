@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
     }
   }
   if (files.empty()) {
-    Usage(std::cerr);
+    std::cerr << "bag_info: no FILE given (see bag_info --help)\n";
     return 2;
   }
   int failures = 0;

@@ -3,6 +3,7 @@
 // Adds per row: predicted_bias_m = b(Z, α) at Z = median_m, α = angle_deg; corrected_m = Z − b;
 // predictive_std_m; margin_m = corrected_m − k·predictive_std_m (safe distance); residual_m =
 // corrected_m − distance_m. Rows whose status is not ok get empty cells.
+#include <cmath>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -44,11 +45,16 @@ int main(int argc, char** argv) {
     else if (a == "--in") in = v;
     else if (a == "--out") out = v;
     else if (a == "--k") {
+      // k standard deviations below the corrected distance: finite and >= 0, or the margin
+      // would not be a distance the target is not nearer than.
+      size_t used = 0;
       try {
-        k = std::stod(v);
+        k = std::stod(v, &used);
       } catch (const std::exception&) {
-        return Fail("bad arguments: --k '" + v + "' is not a number");
+        used = 0;
       }
+      if (used == 0 || used != v.size() || !std::isfinite(k) || k < 0)
+        return Fail("bad arguments: --k '" + v + "' is not a finite number >= 0");
     } else {
       return Fail("bad arguments: unknown argument '" + a + "' (see correct_depth --help)");
     }
@@ -56,8 +62,10 @@ int main(int argc, char** argv) {
   if (weights_path.empty() || in.empty() || out.empty()) {
     return Fail("usage: correct_depth --weights w.yaml --in metrics.csv --out corrected.csv");
   }
-  if (io::SameFile(in, out) || io::SameFile(weights_path, out)) {
-    return Fail(out + ": the output would overwrite an input");
+  try {
+    io::CheckOutputs({out}, {in, weights_path});
+  } catch (const io::IoError& e) {
+    return Fail(e.what());
   }
   std::vector<camera::PanelMetrics> rows;
   camera::BiasWeights weights;

@@ -50,8 +50,14 @@ int Fail(const std::string& what) {
 
 double ToDouble(const std::string& flag, const std::string& text) {
   size_t used = 0;
-  const double v = std::stod(text, &used);
-  if (used != text.size()) throw std::invalid_argument(flag + " '" + text + "' is not a number");
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v))
+    throw std::invalid_argument(flag + " '" + text + "' is not a finite number");
   return v;
 }
 
@@ -110,7 +116,11 @@ int main(int argc, char** argv) {
     return Fail(std::string("bad arguments: ") + e.what());
   }
   if (in.empty() || out.empty()) return Fail("usage: fit_bias --in metrics.csv --out w.yaml");
-  if (io::SameFile(in, out)) return Fail(out + ": the output would overwrite the input");
+  try {
+    io::CheckOutputs({out, cv_out}, {in});
+  } catch (const io::IoError& e) {
+    return Fail(e.what());
+  }
   if (nested) params.nested_candidates = model::DefaultCandidates(params.fit);
   std::string why;
   if (!params.IsValid(&why)) return Fail(why);
@@ -132,12 +142,8 @@ int main(int argc, char** argv) {
   weights.input_sha256 = sha;
   weights.tool = "fit_bias";
   weights.tool_version = DEPTHBIAS_VERSION;
-  try {
-    io::WriteWeightsYaml(out, weights);
-  } catch (const io::IoError& e) {
-    return Fail(e.what());
-  }
-
+  std::vector<std::pair<std::string, std::string>> files = {
+      {out, io::FormatWeightsYaml(weights)}};
   if (!cv_out.empty()) {
     // Held-out error of every row under every scheme: which recordings the model cannot explain.
     std::vector<std::vector<std::string>> cells;
@@ -152,12 +158,14 @@ int main(int argc, char** argv) {
         }
       }
     }
-    try {
-      io::WriteCsv(cv_out, {"bag", "group", "scheme", "distance_m", "angle_deg", "emitter",
-                            "bias_m", "heldout_error_m"}, cells);
-    } catch (const io::IoError& e) {
-      return Fail(e.what());
-    }
+    files.push_back({cv_out, io::FormatCsv({"bag", "group", "scheme", "distance_m", "angle_deg",
+                                            "emitter", "bias_m", "heldout_error_m"},
+                                           cells)});
+  }
+  try {
+    io::WriteFilesAtomic(files);  // both or neither
+  } catch (const io::IoError& e) {
+    return Fail(e.what());
   }
   std::fputs(model::FormatFitTable(report, params).c_str(), stdout);
   return 0;

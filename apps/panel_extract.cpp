@@ -21,7 +21,7 @@ using namespace depthbias;
 
 namespace {
 
-// A mistake on the command line: the message is followed by the usage line.
+// A mistake on the command line: the message points to --help.
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -30,6 +30,20 @@ const char* kUsage =
     "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
     "[--panels-out panels.json] [--jobs N] [--region-mode auto|box --boxes JSON] [--quiet] "
     "BAG_OR_DIR...";
+
+// --jobs: a whole number of parallel recordings in [1, 256].
+int Jobs(const std::string& text) {
+  size_t used = 0;
+  int n = 0;
+  try {
+    n = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || n < 1 || n > 256)
+    throw UsageError("--jobs '" + text + "' is not a whole number in [1, 256]");
+  return n;
+}
 
 class BagSource : public panel::FrameSource {
  public:
@@ -132,7 +146,7 @@ int main(int argc, char** argv) {
       else if (a == "--panels-out") o.panels_out = value();
       else if (a == "--boxes") o.boxes = value();
       else if (a == "--region-mode") o.mode = value();
-      else if (a == "--jobs") o.jobs = std::max(1, std::atoi(value().c_str()));
+      else if (a == "--jobs") o.jobs = Jobs(value());
       else if (a == "--quiet") o.quiet = true;
       else if (a == "--help" || a == "-h") return std::cout << kUsage << "\n", 0;
       else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
@@ -152,9 +166,14 @@ int main(int argc, char** argv) {
     if (!params.IsValid(&why)) throw std::runtime_error(o.config + ": " + why);
     if (!o.manifest.empty()) manifest = std::make_unique<io::Manifest>(io::ReadManifest(o.manifest));
     if (!o.boxes.empty()) boxes = io::ReadBoxes(o.boxes);
-    for (const std::string& path : io::ListBags(o.inputs)) jobs.push_back({path, {}, {}});
+    std::vector<std::string> inputs = {o.manifest, o.config, o.boxes};
+    for (const std::string& path : io::ListBags(o.inputs)) {
+      jobs.push_back({path, {}, {}});
+      inputs.push_back(path);
+    }
+    io::CheckOutputs({o.out, o.panels_out}, inputs);
   } catch (const UsageError& e) {
-    std::cerr << "panel_extract: " << e.what() << "\n" << kUsage << "\n";
+    std::cerr << "panel_extract: " << e.what() << " (see panel_extract --help)\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "panel_extract: " << e.what() << "\n";
@@ -192,8 +211,9 @@ int main(int argc, char** argv) {
     all_ok = all_ok && j.row.ok();
   }
   try {
-    io::WriteMetricsCsv(o.out, rows);
-    if (!o.panels_out.empty()) io::WriteFileAtomic(o.panels_out, json + "\n]\n");
+    std::vector<std::pair<std::string, std::string>> files = {{o.out, io::FormatMetricsCsv(rows)}};
+    if (!o.panels_out.empty()) files.push_back({o.panels_out, json + "\n]\n"});
+    io::WriteFilesAtomic(files);  // both or neither
   } catch (const std::exception& e) {
     std::cerr << "panel_extract: " << e.what() << "\n";
     return 2;

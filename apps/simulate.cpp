@@ -189,6 +189,8 @@ int main(int argc, char** argv) {
           !sim::BuildDepartures(effects, &params.departures, &why))
         throw Fail(effects_file + ": " + why);
     }
+    io::CheckOutputs({out, out_dir.empty() ? "" : (fs::path(out_dir) / "manifest.csv").string()},
+                     {protocol_file, sensor_file, effects_file, calibrate_to, sensor_bag});
     if (frames != 0) params.protocol.frames = frames;
     if (!params.IsValid(&why) || !mp.IsValid(&why)) throw Fail(why);
 

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -39,7 +40,11 @@ bool FileExists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
-void WriteFileAtomic(const std::string& path, const std::string& contents) {
+namespace {
+
+// Writes contents to a new temporary file beside path and returns its name; on failure nothing
+// is left and IoError names path.
+std::string Stage(const std::string& path, const std::string& contents) {
   if (path.empty()) throw IoError("output path is empty");
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
@@ -75,10 +80,61 @@ void WriteFileAtomic(const std::string& path, const std::string& contents) {
     ::unlink(tmp.c_str());
     throw IoError(path + ": write failed: " + err);
   }
+  return tmp;
+}
+
+void Commit(const std::string& tmp, const std::string& path) {
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string err = std::strerror(errno);
     ::unlink(tmp.c_str());
     throw IoError(path + ": cannot rename the finished file into place: " + err);
+  }
+}
+
+// The same path, whether or not it exists yet.
+bool SamePath(const std::string& a, const std::string& b) {
+  if (SameFile(a, b)) return true;
+  std::error_code ea, eb;
+  const auto ca = std::filesystem::weakly_canonical(a, ea);
+  const auto cb = std::filesystem::weakly_canonical(b, eb);
+  return !ea && !eb && ca == cb;
+}
+
+}  // namespace
+
+void WriteFileAtomic(const std::string& path, const std::string& contents) {
+  Commit(Stage(path, contents), path);
+}
+
+void WriteFilesAtomic(const std::vector<std::pair<std::string, std::string>>& files) {
+  std::vector<std::string> staged;
+  try {
+    for (const auto& [path, contents] : files) staged.push_back(Stage(path, contents));
+  } catch (...) {
+    for (const std::string& tmp : staged) ::unlink(tmp.c_str());
+    throw;
+  }
+  for (size_t i = 0; i < staged.size(); ++i) {
+    try {
+      Commit(staged[i], files[i].first);
+    } catch (...) {
+      for (size_t k = i + 1; k < staged.size(); ++k) ::unlink(staged[k].c_str());
+      throw;
+    }
+  }
+}
+
+void CheckOutputs(const std::vector<std::string>& outputs,
+                  const std::vector<std::string>& inputs) {
+  for (size_t i = 0; i < outputs.size(); ++i) {
+    if (outputs[i].empty()) continue;
+    for (const std::string& in : inputs)
+      if (!in.empty() && SameFile(outputs[i], in))
+        throw IoError(outputs[i] + ": is also an input (" + in +
+                      "); an output never overwrites an input");
+    for (size_t k = i + 1; k < outputs.size(); ++k)
+      if (!outputs[k].empty() && SamePath(outputs[i], outputs[k]))
+        throw IoError(outputs[i] + ": given for two outputs");
   }
 }
 

@@ -41,9 +41,11 @@ void Flatten(const YAML::Node& node, const std::string& prefix, const std::strin
 }  // namespace
 
 std::vector<ConfigEntry> ParseConfigScalars(const std::string& text, const std::string& file) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw IoError(file + ": is empty (expected key: value lines)");
   const YAML::Node root = Load(text, file);
   std::vector<ConfigEntry> out;
-  if (root.IsNull()) return out;
+  if (root.IsNull()) return out;  // comments only: no overrides
   if (!root.IsMap()) throw IoError(file + ": expected a mapping of key: value at the top level");
   Flatten(root, "", file, &out);
   return out;

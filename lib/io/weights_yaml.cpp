@@ -1,6 +1,7 @@
 #include "io/weights_yaml.h"
 
 #include <cmath>
+#include <initializer_list>
 
 #include <yaml-cpp/yaml.h>
 
@@ -58,6 +59,19 @@ class Reader {
       v.push_back(Double(n[i], path + "[" + std::to_string(i) + "]"));
     }
     return v;
+  }
+  // Fails on a key of map n that is not one of `known` (a misspelt key must not be ignored).
+  void OnlyKeys(const YAML::Node& n, const std::string& path,
+                std::initializer_list<const char*> known) const {
+    for (const auto& kv : n) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
+      bool ok = false;
+      for (const char* k : known) ok = ok || key == k;
+      if (ok) continue;
+      std::string list;
+      for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+      Fail(path.empty() ? key : path + "." + key, "unknown key (expected one of: " + list + ")");
+    }
   }
   camera::BiasCrossValidation Cv(const YAML::Node& n, const std::string& path) const {
     if (!n.IsMap()) Fail(path, "expected a map {scheme, rmse_m, mae_m}");
@@ -154,6 +168,9 @@ camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string&
     r.Fail("schema", std::string("not a depthbias weights file (expected schema: ") + kSchema +
                          ")");
   }
+  r.OnlyKeys(root, "",
+             {"schema", "model", "target", "lambda", "loss", "loss_scale_m", "focal_px",
+              "baseline_m", "group_by", "groups", "provenance"});
   camera::BiasWeights w;
   w.schema = kSchema;
   w.model = r.String(r.Need(root, "model", "model"), "model");
@@ -176,6 +193,9 @@ camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string&
     const std::string p = "groups[" + std::to_string(i) + "]";
     const YAML::Node gn = groups[i];
     if (!gn.IsMap()) r.Fail(p, "expected a map");
+    r.OnlyKeys(gn, p,
+               {"light", "preset", "emitter", "n", "weights", "knots_deg", "rmse_m", "mae_m",
+                "residual_std_m", "cv", "cv_more", "covariance"});
     camera::BiasWeightsGroup g;
     g.light = r.String(r.Need(gn, "light", p + ".light"), p + ".light");
     g.preset = r.String(r.Need(gn, "preset", p + ".preset"), p + ".preset");
@@ -214,7 +234,9 @@ camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string&
     }
     w.groups.push_back(std::move(g));
   }
-  if (const YAML::Node prov = root["provenance"]; prov && prov.IsMap()) {
+  if (const YAML::Node prov = root["provenance"]; prov) {
+    if (!prov.IsMap()) r.Fail("provenance", "expected a map");
+    r.OnlyKeys(prov, "provenance", {"input_file", "input_sha256", "tool", "tool_version"});
     if (prov["input_file"]) w.input_file = r.String(prov["input_file"], "provenance.input_file");
     if (prov["input_sha256"]) {
       w.input_sha256 = r.String(prov["input_sha256"], "provenance.input_sha256");

@@ -16,8 +16,14 @@ struct ParseError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// What a node is, for an error line: a scalar quoted (cut at 40 characters, on one line).
 std::string Text(const YAML::Node& n) {
-  if (n.IsScalar()) return "'" + n.Scalar() + "'";
+  if (n.IsScalar()) {
+    std::string s = n.Scalar();
+    for (char& c : s)
+      if (c == '\n' || c == '\r') c = ' ';
+    return "'" + (s.size() > 40 ? s.substr(0, 40) + "...'" : s + "'");
+  }
   if (n.IsSequence()) return "a list";
   if (n.IsMap()) return "a map";
   return "nothing";

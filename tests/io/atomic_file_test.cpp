@@ -54,6 +54,41 @@ TEST(AtomicFile, SameFileSeesThroughOtherSpellings) {
   EXPECT_FALSE(SameFile((dir / "a.csv").string(), (dir / "b.csv").string()));
 }
 
+// The outputs of one run are written together: when one cannot be written, none is.
+TEST(AtomicFile, SeveralOutputsAreAllOrNothing) {
+  const auto dir = FreshDir("io");
+  const std::string a = (dir / "a.csv").string(), b = (dir / "b.json").string();
+  WriteFilesAtomic({{a, "one"}, {b, "two"}});
+  EXPECT_EQ(ReadFile(a), "one");
+  EXPECT_EQ(ReadFile(b), "two");
+  const std::string missing = (dir / "no_such_folder" / "c.json").string();
+  try {
+    WriteFilesAtomic({{a, "changed"}, {missing, "x"}});
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(ReadFile(a), "one");  // left as it was
+  EXPECT_EQ(CountFiles(dir), 2);  // no temporary left
+}
+
+TEST(AtomicFile, AnOutputNeverOverwritesAnInput) {
+  const auto dir = FreshDir("io");
+  const std::string in = (dir / "in.csv").string();
+  WriteFileAtomic(in, "x");
+  const std::string same = (dir / "." / "in.csv").string();
+  try {
+    CheckOutputs({(dir / "out.csv").string(), same}, {"", in});
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("is also an input"), std::string::npos) << e.what();
+  }
+  // Two outputs on one path, whether or not it exists yet.
+  EXPECT_THROW(CheckOutputs({(dir / "o.csv").string(), (dir / "." / "o.csv").string()}, {}),
+               IoError);
+  EXPECT_NO_THROW(CheckOutputs({(dir / "out.csv").string(), ""}, {in, ""}));
+}
+
 TEST(AtomicFile, BaseNameDropsFolders) {
   EXPECT_EQ(BaseName("a/b/c.bag"), "c.bag");
   EXPECT_EQ(BaseName("c.bag"), "c.bag");

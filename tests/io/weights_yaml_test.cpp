@@ -82,5 +82,21 @@ TEST(WeightsYaml, OtherSchemasAndWrongTypesAreNamed) {
   EXPECT_NE(ErrorOf(bad).find("'model': missing"), std::string::npos) << ErrorOf(bad);
 }
 
+// A misspelt key must not be ignored, at the top, in a group or in the provenance.
+TEST(WeightsYaml, UnknownKeysAreNamed) {
+  const std::string text = FormatWeightsYaml(Example());
+  std::string bad = "bogus_key: 1\n" + text;
+  EXPECT_NE(ErrorOf(bad).find("key 'bogus_key': unknown key"), std::string::npos) << ErrorOf(bad);
+  bad = text;
+  bad.replace(bad.find("rmse_m:"), 7, "rsme_m:");
+  EXPECT_NE(ErrorOf(bad).find("'groups[0].rsme_m': unknown key"), std::string::npos)
+      << ErrorOf(bad);
+  bad = text;
+  bad.replace(bad.find("tool_version:"), 13, "tool_versoin:");
+  EXPECT_NE(ErrorOf(bad).find("'provenance.tool_versoin': unknown key"), std::string::npos)
+      << ErrorOf(bad);
+  EXPECT_EQ(ErrorOf(text), "");
+}
+
 }  // namespace
 }  // namespace depthbias::io

@@ -179,6 +179,16 @@ TEST(FitBiasApp, BadInputsFailCleanlyWithoutOutput) {
   ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "none.csv").string() + " --out " +
                                           out.string(), dir),
                      out, "none.csv");
+  // The weights are not written when the held-out table cannot be: both or neither.
+  ExpectCleanFailure(Exec("fit_bias", "--in " + kArticle + " --out " + out.string() +
+                                          " --cv-out " + (dir / "no" / "h.csv").string(), dir),
+                     out, "h.csv");
+  ExpectCleanFailure(Exec("fit_bias", "--in " + kArticle + " --out " + out.string() +
+                                          " --lambda abc", dir),
+                     out, "--lambda 'abc' is not a finite number");
+  ExpectCleanFailure(Exec("fit_bias", "--in " + kArticle + " --out " + out.string() +
+                                          " --loss-scale 1e999", dir),
+                     out, "--loss-scale '1e999'");
 }
 
 TEST(CorrectDepthApp, AddsColumnsAndRefusesBadWeights) {
@@ -220,6 +230,16 @@ TEST(CorrectDepthApp, AddsColumnsAndRefusesBadWeights) {
                                                " --in " + kArticle + " --out " + out2.string(),
                           dir),
                      out2, "groups[0].n");
+  // A safety margin needs a finite k >= 0.
+  for (const std::string k : {"-2", "nan", "2abc", "inf"})
+    ExpectCleanFailure(Exec("correct_depth", "--weights " + w.string() + " --in " + kArticle +
+                                                 " --out " + out2.string() + " --k " + k,
+                            dir),
+                       out2, "--k '" + k + "'");
+  ExpectCleanFailure(Exec("correct_depth", "--weights " + w.string() + " --in " + kArticle +
+                                               " --out " + w.string(), dir),
+                     out2, "is also an input");
+  EXPECT_NO_THROW(io::ReadWeightsYaml(w.string()));  // untouched
 }
 
 }  // namespace

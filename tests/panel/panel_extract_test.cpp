@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
 
@@ -264,10 +265,59 @@ TEST_F(PanelExtractBadInput, BadConfigAndBoxesAreRefused) {
 }
 
 TEST_F(PanelExtractBadInput, UnwritableOutputLeavesNothing) {
-  const AppRun r = Extract("--out " + (d_ / "no" / "m.csv").string() + " " + kBags +
-                            "/panel_04m_00deg.bag", d_);
+  const std::string bag = kBags + "/panel_04m_00deg.bag";
+  AppRun r = Extract("--out " + (d_ / "no" / "m.csv").string() + " " + bag, d_);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("m.csv"), std::string::npos) << r.err;
+  EXPECT_TRUE(NothingWritten());
+  // The metrics are not written when panels.json cannot be: both or neither.
+  r = Extract("--out " + Out() + " --panels-out " + (d_ / "no" / "p.json").string() + " " + bag,
+              d_);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("p.json"), std::string::npos) << r.err;
+  EXPECT_TRUE(NothingWritten());
+}
+
+// An output that is also an input (the manifest, a recording) is refused before anything runs.
+TEST_F(PanelExtractBadInput, OutputsNeverOverwriteInputs) {
+  const std::string bag = kBags + "/panel_04m_00deg.bag";
+  const std::string manifest_text = "bag,distance_m,angle_deg,light\npanel_04m_00deg.bag,4,0,x\n";
+  std::ofstream(d_ / "manifest.csv") << manifest_text;
+  const std::string manifest = (d_ / "manifest.csv").string();
+  AppRun r = Extract("--manifest " + manifest + " --out " + manifest + " " + bag, d_);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("is also an input"), std::string::npos) << r.err;
+  EXPECT_EQ(io::ReadFile(manifest), manifest_text);
+  fs::copy_file(bag, d_ / "copy.bag");
+  const auto size = fs::file_size(d_ / "copy.bag");
+  r = Extract("--out " + (d_ / "copy.bag").string() + " " + (d_ / "copy.bag").string(), d_);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(fs::file_size(d_ / "copy.bag"), size);
+  r = Extract("--out " + Out() + " --panels-out " + Out() + " " + bag, d_);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("given for two outputs"), std::string::npos) << r.err;
+  fs::remove(d_ / "copy.bag");
+  fs::remove(d_ / "manifest.csv");
+  EXPECT_TRUE(NothingWritten());
+}
+
+TEST_F(PanelExtractBadInput, BadFlagsGiveOneLine) {
+  const std::string bag = kBags + "/panel_04m_00deg.bag";
+  for (const std::string jobs : {"0", "abc", "-1", "99999999999", "2x"}) {
+    const AppRun r = Extract("--jobs " + jobs + " --out " + Out() + " " + bag, d_);
+    EXPECT_EQ(r.code, 2) << jobs;
+    EXPECT_NE(r.err.find("--jobs '" + jobs + "'"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+  }
+  const AppRun r = Extract("--out " + Out(), d_);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err, "panel_extract: no recording given (see panel_extract --help)\n");
+  std::ofstream(d_ / "empty.yaml").close();
+  const AppRun e = Extract("--config " + (d_ / "empty.yaml").string() + " --out " + Out() +
+                               " " + bag, d_);
+  EXPECT_EQ(e.code, 2);
+  EXPECT_NE(e.err.find("empty.yaml: is empty"), std::string::npos) << e.err;
+  fs::remove(d_ / "empty.yaml");
   EXPECT_TRUE(NothingWritten());
 }
 

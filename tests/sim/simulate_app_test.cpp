@@ -106,6 +106,24 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
                                    " --metrics-only --out " + (d / "m.csv").string();
   EXPECT_EQ(RunCommand(bad_protocol, d, &err), 1);
   EXPECT_NE(err.find("protocol.yaml: protocol.distance_is"), std::string::npos) << err;
+  // An output that is also an input is refused, and the input left as it was.
+  const fs::path kept = d / "kept.yaml";
+  Write(kept, "protocol: {frames: 2}\n");
+  EXPECT_EQ(RunCommand(Bin("simulate") + " --protocol " + kept.string() + " --metrics-only --out " +
+                           kept.string(),
+                       d, &err),
+            1);
+  EXPECT_NE(err.find("is also an input"), std::string::npos) << err;
+  EXPECT_EQ(Read(kept), "protocol: {frames: 2}\n");
+  // A file that is not YAML at all is named in one short line.
+  const fs::path csv = d / "table.csv";
+  Write(csv, std::string("bag,light\n") + std::string(5000, 'x') + ",daylight\n");
+  EXPECT_EQ(RunCommand(Bin("simulate") + " --protocol " + csv.string() + " --metrics-only --out " +
+                           (d / "m.csv").string(),
+                       d, &err),
+            1);
+  EXPECT_NE(err.find("table.csv"), std::string::npos) << err;
+  EXPECT_LT(err.size(), 300u) << err;
 }
 
 // Recordings are simulated several at a time, and a recording's frames on several threads when
