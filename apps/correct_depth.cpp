@@ -3,11 +3,11 @@
 // Adds per row: predicted_bias_m = b(Z, α) at Z = median_m, α = angle_deg; corrected_m = Z − b;
 // predictive_std_m; margin_m = corrected_m − k·predictive_std_m (safe distance); residual_m =
 // corrected_m − distance_m. Rows whose status is not ok get empty cells.
-#include <cmath>
 #include <iostream>
 #include <string>
 #include <vector>
 
+#include "flag_number.h"
 #include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
@@ -47,13 +47,7 @@ int main(int argc, char** argv) {
     else if (a == "--k") {
       // k standard deviations below the corrected distance: finite and >= 0, or the margin
       // would not be a distance the target is not nearer than.
-      size_t used = 0;
-      try {
-        k = std::stod(v, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != v.size() || !std::isfinite(k) || k < 0)
+      if (!apps::ParseFlagNumber(v, false, 0, apps::kNoLimit, &k))
         return Fail("bad arguments: --k '" + v + "' is not a finite number >= 0");
     } else {
       return Fail("bad arguments: unknown argument '" + a + "' (see correct_depth --help)");

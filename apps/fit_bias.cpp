@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "flag_number.h"
 #include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
@@ -49,14 +50,8 @@ int Fail(const std::string& what) {
 }
 
 double ToDouble(const std::string& flag, const std::string& text) {
-  size_t used = 0;
   double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(v))
+  if (!apps::ParseFlagNumber(text, false, -apps::kNoLimit, apps::kNoLimit, &v))
     throw std::invalid_argument(flag + " '" + text + "' is not a finite number");
   return v;
 }

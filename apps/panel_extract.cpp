@@ -8,6 +8,7 @@
 #include <mutex>
 #include <thread>
 
+#include "flag_number.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/bag_list.h"
@@ -33,16 +34,10 @@ const char* kUsage =
 
 // --jobs: a whole number of parallel recordings in [1, 256].
 int Jobs(const std::string& text) {
-  size_t used = 0;
-  int n = 0;
-  try {
-    n = std::stoi(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || n < 1 || n > 256)
+  double n = 0;
+  if (!apps::ParseFlagNumber(text, true, 1, 256, &n))
     throw UsageError("--jobs '" + text + "' is not a whole number in [1, 256]");
-  return n;
+  return static_cast<int>(n);
 }
 
 class BagSource : public panel::FrameSource {

@@ -1,7 +1,6 @@
 // simulate: the simulated D455 on a protocol (lib/sim): bags and their manifest, the metrics-only
 // table, or the base sensor calibrated to a real table (see kUsage). --threads N: recordings
 // simulated in parallel (default: all cores; results do not depend on it).
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -9,6 +8,7 @@
 #include <string>
 #include <thread>
 
+#include "flag_number.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/manifest.h"
@@ -40,15 +40,8 @@ struct Fail : std::runtime_error {
 // A flag's number: a whole number in [min_value, 2^31 − 1] when whole, else any finite number
 // >= min_value.
 double Parse(const std::string& flag, const std::string& text, bool whole, double min_value) {
-  size_t used = 0;
   double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(v) || v < min_value ||
-      (whole && (v != std::floor(v) || v > 2147483647.0)))
+  if (!apps::ParseFlagNumber(text, whole, min_value, whole ? 2147483647.0 : apps::kNoLimit, &v))
     throw Fail(flag + " '" + text + "' is not a " + (whole ? "whole " : "") + "number >= " +
                std::to_string(static_cast<long long>(min_value)) +
                (whole ? " and < 2^31" : ""));
