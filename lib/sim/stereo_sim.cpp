@@ -436,21 +436,24 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
   std::uint16_t* const out = counts->data();
   const int* const window = pixels.window.data();
   const std::uint64_t* const image = pixels.image.data();
-  std::uint64_t pair = ~0ULL, hash = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const int p = window[i];
-    if (!maps.valid_threshold[p]) {
-      out[i] = 0;
-      continue;
+  const std::uint64_t seed = truth_.cell_seed;
+  auto run = [&, out, window, image, seed](auto mixing) {
+    constexpr bool kMix = decltype(mixing)::value;
+    const Maps m = maps;  // a local copy the compiler keeps in registers
+    std::uint64_t pair = ~0ULL, hash = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const std::uint64_t c = frame_base + image[i];
+      if ((c >> 1) != pair) {  // neighbours in a row share their hash
+        pair = c >> 1;
+        hash = Mix64(seed + pair * kGolden);
+      }
+      out[i] = Draw<kMix>(m, HalfOf(hash, c), window[i]);
     }
-    const std::uint64_t c = frame_base + image[i];
-    if ((c >> 1) != pair) {  // neighbours in a row share their hash
-      pair = c >> 1;
-      hash = PairHash(c);
-    }
-    const std::uint32_t bits = HalfOf(hash, c);
-    out[i] = mixing_ ? Draw<true>(maps, bits, p) : Draw<false>(maps, bits, p);
-  }
+  };
+  if (mixing_)
+    run(std::true_type{});
+  else
+    run(std::false_type{});
 }
 
 PixelList StereoSim::RegionPixels(double margin_px) const {
