@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "flag_number.h"
+#include "args.h"
 #include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
@@ -33,25 +33,23 @@ int main(int argc, char** argv) {
   using namespace depthbias;
   std::string weights_path, in, out;
   double k = 2.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--help" || a == "-h") {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (i + 1 >= argc) return Fail("bad arguments: " + a + " needs a value");
-    const std::string v = argv[++i];
-    if (a == "--weights") weights_path = v;
-    else if (a == "--in") in = v;
-    else if (a == "--out") out = v;
-    else if (a == "--k") {
+  try {
+    for (apps::Args args(argc, argv); args.Next();) {
+      const std::string& a = args.flag();
+      if (args.IsHelp()) {
+        std::cout << kUsage;
+        return 0;
+      }
+      if (a == "--weights") weights_path = args.Value();
+      else if (a == "--in") in = args.Value();
+      else if (a == "--out") out = args.Value();
       // k standard deviations below the corrected distance: finite and >= 0, or the margin
       // would not be a distance the target is not nearer than.
-      if (!apps::ParseFlagNumber(v, false, 0, apps::kNoLimit, &k))
-        return Fail("bad arguments: --k '" + v + "' is not a finite number >= 0");
-    } else {
-      return Fail("bad arguments: unknown argument '" + a + "' (see correct_depth --help)");
+      else if (a == "--k") k = args.Number(false, 0);
+      else throw std::invalid_argument("unknown argument '" + a + "' (see correct_depth --help)");
     }
+  } catch (const std::invalid_argument& e) {
+    return Fail(std::string("bad arguments: ") + e.what());
   }
   if (weights_path.empty() || in.empty() || out.empty()) {
     return Fail("usage: correct_depth --weights w.yaml --in metrics.csv --out corrected.csv");

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "flag_number.h"
+#include "args.h"
 #include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
@@ -49,13 +49,6 @@ int Fail(const std::string& what) {
   return 1;
 }
 
-double ToDouble(const std::string& flag, const std::string& text) {
-  double v = 0;
-  if (!apps::ParseFlagNumber(text, false, -apps::kNoLimit, apps::kNoLimit, &v))
-    throw std::invalid_argument(flag + " '" + text + "' is not a finite number");
-  return v;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -63,23 +56,21 @@ int main(int argc, char** argv) {
   bool nested = false;
   model::FitGroupsParams params;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--help" || a == "-h") {
+    for (apps::Args args(argc, argv); args.Next();) {
+      const std::string& a = args.flag();
+      if (args.IsHelp()) {
         std::fputs(kUsage, stdout);
         return 0;
       }
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-        return argv[++i];
-      };
+      auto value = [&] { return args.Value(); };
+      auto number = [&] { return args.Number(false, -apps::kNoLimit); };
       if (a == "--in") in = value();
       else if (a == "--out") out = value();
       else if (a == "--model") params.fit.model = value();
-      else if (a == "--lambda") params.fit.lambda = ToDouble(a, value());
-      else if (a == "--loss-scale") params.fit.loss_scale_m = ToDouble(a, value());
-      else if (a == "--focal-px") params.fit.focal_px = ToDouble(a, value());
-      else if (a == "--baseline-m") params.fit.baseline_m = ToDouble(a, value());
+      else if (a == "--lambda") params.fit.lambda = number();
+      else if (a == "--loss-scale") params.fit.loss_scale_m = number();
+      else if (a == "--focal-px") params.fit.focal_px = number();
+      else if (a == "--baseline-m") params.fit.baseline_m = number();
       else if (a == "--cv-out") cv_out = value();
       else if (a == "--weight-valid") params.fit.weight_by_valid_pixels = true;
       else if (a == "--nested") nested = true;
@@ -101,8 +92,8 @@ int main(int argc, char** argv) {
           throw std::invalid_argument("--prior expects name=mean:strength, got '" + v + "'");
         }
         params.fit.priors.push_back({v.substr(0, eq),
-                                     ToDouble("--prior", v.substr(eq + 1, colon - eq - 1)),
-                                     ToDouble("--prior", v.substr(colon + 1))});
+                                     apps::FlagNumber(a, v.substr(eq + 1, colon - eq - 1), false, -apps::kNoLimit),
+                                     apps::FlagNumber(a, v.substr(colon + 1), false, -apps::kNoLimit)});
       } else {
         throw std::invalid_argument("unknown argument '" + a + "' (see fit_bias --help)");
       }

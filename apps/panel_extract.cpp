@@ -8,7 +8,7 @@
 #include <mutex>
 #include <thread>
 
-#include "flag_number.h"
+#include "args.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/bag_list.h"
@@ -22,23 +22,13 @@ using namespace depthbias;
 
 namespace {
 
-// A mistake on the command line: the message points to --help.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+// A mistake on the command line (as apps::Args reports them): the message points to --help.
+using UsageError = std::invalid_argument;
 
 const char* kUsage =
     "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
     "[--panels-out panels.json] [--jobs N] [--region-mode auto|box --boxes JSON] [--quiet] "
     "BAG_OR_DIR...";
-
-// --jobs: a whole number of parallel recordings in [1, 256].
-int Jobs(const std::string& text) {
-  double n = 0;
-  if (!apps::ParseFlagNumber(text, true, 1, 256, &n))
-    throw UsageError("--jobs '" + text + "' is not a whole number in [1, 256]");
-  return static_cast<int>(n);
-}
 
 class BagSource : public panel::FrameSource {
  public:
@@ -129,21 +119,18 @@ int main(int argc, char** argv) {
   std::map<std::string, std::array<double, 4>> boxes;
   std::vector<Job> jobs;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw UsageError(a + " needs a value");
-        return argv[++i];
-      };
+    for (apps::Args args(argc, argv); args.Next();) {
+      const std::string& a = args.flag();
+      auto value = [&] { return args.Value(); };
       if (a == "--manifest") o.manifest = value();
       else if (a == "--config") o.config = value();
       else if (a == "--out") o.out = value();
       else if (a == "--panels-out") o.panels_out = value();
       else if (a == "--boxes") o.boxes = value();
       else if (a == "--region-mode") o.mode = value();
-      else if (a == "--jobs") o.jobs = Jobs(value());
+      else if (a == "--jobs") o.jobs = static_cast<int>(args.Number(true, 1, 256));
       else if (a == "--quiet") o.quiet = true;
-      else if (a == "--help" || a == "-h") return std::cout << kUsage << "\n", 0;
+      else if (args.IsHelp()) return std::cout << kUsage << "\n", 0;
       else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
       else o.inputs.push_back(a);
     }

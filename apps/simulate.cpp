@@ -8,7 +8,7 @@
 #include <string>
 #include <thread>
 
-#include "flag_number.h"
+#include "args.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/manifest.h"
@@ -36,17 +36,6 @@ constexpr char kUsage[] =
 struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
-
-// A flag's number: a whole number in [min_value, 2^31 − 1] when whole, else any finite number
-// >= min_value.
-double Parse(const std::string& flag, const std::string& text, bool whole, double min_value) {
-  double v = 0;
-  if (!apps::ParseFlagNumber(text, whole, min_value, whole ? 2147483647.0 : apps::kNoLimit, &v))
-    throw Fail(flag + " '" + text + "' is not a " + (whole ? "whole " : "") + "number >= " +
-               std::to_string(static_cast<long long>(min_value)) +
-               (whole ? " and < 2^31" : ""));
-  return v;
-}
 
 std::string Fixed(double v, int digits) {
   char buf[64];
@@ -138,16 +127,14 @@ int main(int argc, char** argv) {
   mp.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   sim::SimParams params;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--help" || a == "-h") {
+    for (apps::Args args(argc, argv); args.Next();) {
+      const std::string& a = args.flag();
+      if (args.IsHelp()) {
         std::fputs(kUsage, stdout);
         return 0;
       }
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw Fail(a + " needs a value");
-        return argv[++i];
-      };
+      auto value = [&] { return args.Value(); };
+      constexpr double kMaxInt = 2147483647.0;
       if (a == "--protocol") protocol_file = value();
       else if (a == "--sensor") sensor_file = value();
       else if (a == "--sensor-from") sensor_bag = value();
@@ -156,10 +143,10 @@ int main(int argc, char** argv) {
       else if (a == "--out") out = value();
       else if (a == "--calibrate-to") calibrate_to = value();
       else if (a == "--metrics-only") metrics_only = true;
-      else if (a == "--frames") frames = static_cast<int>(Parse(a, value(), true, 1));
-      else if (a == "--seed") params.seed = static_cast<std::uint64_t>(Parse(a, value(), true, 0));
-      else if (a == "--margin-px") mp.region_margin_px = Parse(a, value(), false, 0);
-      else if (a == "--threads") mp.threads = static_cast<int>(Parse(a, value(), true, 1));
+      else if (a == "--frames") frames = static_cast<int>(args.Number(true, 1, kMaxInt));
+      else if (a == "--seed") params.seed = static_cast<std::uint64_t>(args.Number(true, 0, 9007199254740992.0));
+      else if (a == "--margin-px") mp.region_margin_px = args.Number(false, 0);
+      else if (a == "--threads") mp.threads = static_cast<int>(args.Number(true, 1, 256));
       else throw Fail("unknown argument '" + a + "' (see simulate --help)");
     }
     if (protocol_file.empty()) throw Fail("--protocol FILE is required");
