@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
       depthbias::io::BagReader reader(file, depthbias::io::ReadOptions{partial});
       std::uint64_t frames = 0, checksum = 0;
       if (read_all) {
-        depthbias::camera::DepthFrame frame;
+        depthbias::records::DepthFrame frame;
         while (reader.Next(&frame)) {
           ++frames;
           checksum += frame.counts[frame.counts.size() / 2];

@@ -59,8 +59,8 @@ int main(int argc, char** argv) {
   } catch (const io::IoError& e) {
     return Fail(e.what());
   }
-  std::vector<camera::PanelMetrics> rows;
-  camera::BiasWeights weights;
+  std::vector<records::PanelMetrics> rows;
+  records::BiasWeights weights;
   try {
     weights = io::ReadWeightsYaml(weights_path);
     rows = io::ReadMetricsCsv(in);

@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
   std::string why;
   if (!params.IsValid(&why)) return Fail(why);
 
-  std::vector<camera::PanelMetrics> rows;
+  std::vector<records::PanelMetrics> rows;
   std::string sha;
   try {
     rows = io::ReadMetricsCsv(in);
@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
   if (!report.success) return Fail(in + ": " + report.message);
 
   for (const auto& w : report.warnings) std::cerr << "fit_bias: warning: " << w << "\n";
-  camera::BiasWeights weights = model::ToWeights(report, params);
+  records::BiasWeights weights = model::ToWeights(report, params);
   weights.input_file = in;
   weights.input_sha256 = sha;
   weights.tool = "fit_bias";

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "args.h"
+#include "camera/presets.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/bag_list.h"
@@ -34,7 +35,7 @@ class BagSource : public panel::FrameSource {
  public:
   explicit BagSource(std::string path) : path_(std::move(path)) { Rewind(); }
   const io::BagInfo& info() const { return reader_->info(); }
-  bool Next(camera::DepthFrame* f) override { return reader_->Next(f); }
+  bool Next(records::DepthFrame* f) override { return reader_->Next(f); }
   bool Rewind() override {
     reader_ = std::make_unique<io::BagReader>(path_);
     return true;
@@ -54,13 +55,13 @@ struct Options {
 
 struct Job {
   std::string path;
-  camera::PanelMetrics row;
+  records::PanelMetrics row;
   std::string json;
 };
 
 void Run(Job* job, const Options& o, const panel::PanelParams& params,
          const io::Manifest* manifest, const std::map<std::string, std::array<double, 4>>& boxes) {
-  camera::PanelMetrics& m = job->row;
+  records::PanelMetrics& m = job->row;
   const std::string name = io::BaseName(job->path);
   m.bag = name;
   panel::ExtractResult r;
@@ -87,13 +88,13 @@ void Run(Job* job, const Options& o, const panel::PanelParams& params,
     if (truth) window = {truth->distance_m, truth->angle_deg};
     const auto preset = info.options.find("Visual_Preset");
     const auto emitter = info.options.find("Emitter_Enabled");
-    if (preset != info.options.end()) m.preset = io::PresetName(preset->second);
+    if (preset != info.options.end()) m.preset = camera::PresetName(preset->second);
     if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
     panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
     r = panel::ExtractPanel(ahead, in, params, window, box);
     if (truth && truth->preset) m.preset = *truth->preset;
     if (truth && truth->emitter) m.emitter = *truth->emitter;
-    const camera::PanelMetrics known = m;  // what the manifest and the bag say
+    const records::PanelMetrics known = m;  // what the manifest and the bag say
     m = r.metrics;
     m.bag = known.bag;
     m.light = known.light;
@@ -184,7 +185,7 @@ int main(int argc, char** argv) {
   for (std::thread& t : threads) t.join();
   if (progress) std::cerr << "\r\033[K";
 
-  std::vector<camera::PanelMetrics> rows;
+  std::vector<records::PanelMetrics> rows;
   std::string json = "[\n";
   bool all_ok = true;
   for (const Job& j : jobs) {

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "args.h"
+#include "camera/presets.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/manifest.h"
@@ -53,13 +54,13 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
     config.intrinsics = params.sensor.intrinsics;
     config.depth_units_m = params.sensor.depth_units_m;
     config.fps = params.protocol.fps;
-    sim::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
+    camera::PresetOptionValue(cell.preset, &config.options["Visual_Preset"]);
     config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
     config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
     config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
     const auto writer =
         std::make_shared<io::BagWriter>((fs::path(dir) / (cell.name + ".bag")).string(), config);
-    return sim::RecordingOutput{[writer](const camera::DepthFrame& f) { writer->Write(f); },
+    return sim::RecordingOutput{[writer](const records::DepthFrame& f) { writer->Write(f); },
                                 [writer] { writer->Close(); }};
   };
   std::vector<io::ManifestRow> rows;
@@ -177,7 +178,7 @@ int main(int argc, char** argv) {
     if (!out_dir.empty()) {
       WriteRecordings(params, mp, out_dir);
     } else if (metrics_only) {
-      std::vector<camera::PanelMetrics> rows;
+      std::vector<records::PanelMetrics> rows;
       for (const auto& r : sim::SimulateProtocolMetrics(params, mp)) rows.push_back(r.metrics);
       io::WriteMetricsCsv(out, rows);
     } else {

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "camera/depth_frame.h"
+#include "records/depth_frame.h"
 #include "camera/intrinsics.h"
 
 namespace depthbias::io {
@@ -78,10 +78,6 @@ struct BagInfo {
   std::map<std::string, std::string> device;   // "Name", "Serial Number", "Firmware Version", ...
 };
 
-// Short name of a D455 Visual_Preset value (rs2_rs400_visual_preset): 3 → "HA" (High
-// Accuracy), 4 → "HD" (High Density), 0 Custom, 1 Default, 2 Hand, 5 Medium Density,
-// 6 Remove IR Pattern; "preset <n>" for any other value.
-std::string PresetName(double visual_preset);
 
 struct ReadOptions {
   // On damage, stop at the last good frame instead of throwing. A bag rosbag cannot open (no
@@ -104,7 +100,7 @@ class BagReader {
 
   // Next depth frame in recorded order; false at the end. Throws BagError on damage unless
   // allow_partial, in which case it returns false and damage() says what was wrong.
-  bool Next(camera::DepthFrame* frame);
+  bool Next(records::DepthFrame* frame);
   const std::string& damage() const;
 
  private:
@@ -134,7 +130,7 @@ class BagWriter {
   BagWriter(const BagWriter&) = delete;
   BagWriter& operator=(const BagWriter&) = delete;
 
-  void Write(const camera::DepthFrame& frame);  // throws BagError
+  void Write(const records::DepthFrame& frame);  // throws BagError
   void Close();                                 // throws BagError
 
  private:

@@ -615,15 +615,15 @@ struct BagReader::Impl {
     if (frames) next_frame = frames->begin();
   }
 
-  bool NextWithRosbag(camera::DepthFrame* frame) {
+  bool NextWithRosbag(records::DepthFrame* frame) {
     if (!frames || next_frame == frames->end()) return false;
     const std::string where = "depth frame " + std::to_string(frames_read + 1) + " of " +
                               std::to_string(info.depth_frames);
     struct Decoder : DepthDecoder {
       const Impl* impl;
       const std::string* where;
-      camera::DepthFrame* frame;
-      Decoder(const Impl* i, const std::string* w, camera::DepthFrame* f)
+      records::DepthFrame* frame;
+      Decoder(const Impl* i, const std::string* w, records::DepthFrame* f)
           : impl(i), where(w), frame(f) {}
       void Decode(const std::uint8_t* data, std::size_t size) override {
         impl->DecodeDepth(data, size, *where, frame);
@@ -804,7 +804,7 @@ struct BagReader::Impl {
     BuildInfo(first_seen);
   }
 
-  bool NextPartial(camera::DepthFrame* frame) {
+  bool NextPartial(records::DepthFrame* frame) {
     Message m;
     while (NextMessage(&cursor, &m)) {
       if (m.conn != depth_conn) continue;
@@ -944,7 +944,7 @@ struct BagReader::Impl {
 
   // One serialized sensor_msgs/Image of the depth stream into a frame (both paths).
   void DecodeDepth(const std::uint8_t* data, std::size_t size, const std::string& where,
-                   camera::DepthFrame* frame) const {
+                   records::DepthFrame* frame) const {
     ImageView v;
     try {
       v = DecodeImage(data, size);
@@ -982,17 +982,6 @@ struct BagReader::Impl {
   }
 };
 
-std::string PresetName(double visual_preset) {
-  static const char* const kNames[] = {"Custom", "Default", "Hand", "HA",
-                                       "HD", "Medium Density", "Remove IR Pattern"};
-  const double rounded = std::round(visual_preset);
-  if (rounded == visual_preset && rounded >= 0 && rounded <= 6)
-    return kNames[static_cast<int>(rounded)];
-  std::ostringstream name;
-  name << "preset " << visual_preset;
-  return name.str();
-}
-
 BagReader::BagReader(const std::string& path, ReadOptions options) : impl_(new Impl) {
   impl_->path = path;
   impl_->options = options;
@@ -1005,7 +994,7 @@ const BagInfo& BagReader::info() const { return impl_->info; }
 
 const std::string& BagReader::damage() const { return impl_->damage; }
 
-bool BagReader::Next(camera::DepthFrame* frame) {
+bool BagReader::Next(records::DepthFrame* frame) {
   Impl& d = *impl_;
   if (d.finished) return false;
   try {

@@ -284,7 +284,7 @@ BagWriter::~BagWriter() {
   std::remove(d.temp_path.c_str());
 }
 
-void BagWriter::Write(const camera::DepthFrame& frame) {
+void BagWriter::Write(const records::DepthFrame& frame) {
   Impl& d = *impl_;
   if (!d.open) d.Fail("write after close");
   const camera::Intrinsics& in = d.config.intrinsics;

@@ -8,7 +8,7 @@
 namespace depthbias::io {
 namespace {
 
-using camera::PanelMetrics;
+using records::PanelMetrics;
 
 struct NumberColumn {
   const char* name;

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "camera/panel_metrics.h"
+#include "records/panel_metrics.h"
 #include "io/io_error.h"
 
 namespace depthbias::io {
@@ -19,15 +19,15 @@ const std::vector<std::string>& MetricsColumns();
 // angle_deg must be numbers in every row; median_m and mean_m in every row whose status is
 // "ok" (a missing status column means "ok"). Any other numeric cell may be empty (NaN).
 // Throws IoError naming the file, the line and the column.
-std::vector<camera::PanelMetrics> ParseMetricsCsv(const std::string& text,
+std::vector<records::PanelMetrics> ParseMetricsCsv(const std::string& text,
                                                   const std::string& file);
-std::vector<camera::PanelMetrics> ReadMetricsCsv(const std::string& path);
+std::vector<records::PanelMetrics> ReadMetricsCsv(const std::string& path);
 
 // All columns of DESIGN.md, NaN as empty cells.
-std::string FormatMetricsCsv(const std::vector<camera::PanelMetrics>& rows);
-void WriteMetricsCsv(const std::string& path, const std::vector<camera::PanelMetrics>& rows);
+std::string FormatMetricsCsv(const std::vector<records::PanelMetrics>& rows);
+void WriteMetricsCsv(const std::string& path, const std::vector<records::PanelMetrics>& rows);
 
 // Header and cells of the rows, for tools that append their own columns (correct_depth).
-std::vector<std::string> MetricsCells(const camera::PanelMetrics& row);
+std::vector<std::string> MetricsCells(const records::PanelMetrics& row);
 
 }  // namespace depthbias::io

@@ -73,7 +73,7 @@ class Reader {
       Fail(path.empty() ? key : path + "." + key, "unknown key (expected one of: " + list + ")");
     }
   }
-  camera::BiasCrossValidation Cv(const YAML::Node& n, const std::string& path) const {
+  records::BiasCrossValidation Cv(const YAML::Node& n, const std::string& path) const {
     if (!n.IsMap()) Fail(path, "expected a map {scheme, rmse_m, mae_m}");
     return {String(Need(n, "scheme", path + ".scheme"), path + ".scheme"),
             Double(Need(n, "rmse_m", path + ".rmse_m"), path + ".rmse_m"),
@@ -86,7 +86,7 @@ class Reader {
 
 }  // namespace
 
-std::string FormatWeightsYaml(const camera::BiasWeights& w) {
+std::string FormatWeightsYaml(const records::BiasWeights& w) {
   YAML::Emitter out;
   out << YAML::BeginMap;
   out << YAML::Key << "schema" << YAML::Value << kSchema;
@@ -118,13 +118,13 @@ std::string FormatWeightsYaml(const camera::BiasWeights& w) {
     out << YAML::Key << "rmse_m" << YAML::Value << Num(g.rmse_m);
     out << YAML::Key << "mae_m" << YAML::Value << Num(g.mae_m);
     out << YAML::Key << "residual_std_m" << YAML::Value << Num(g.residual_std_m);
-    auto cv_map = [&out](const camera::BiasCrossValidation& cv) {
+    auto cv_map = [&out](const records::BiasCrossValidation& cv) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "scheme" << YAML::Value << cv.scheme
           << YAML::Key << "rmse_m" << YAML::Value << Num(cv.rmse_m) << YAML::Key << "mae_m"
           << YAML::Value << Num(cv.mae_m) << YAML::EndMap;
     };
     out << YAML::Key << "cv" << YAML::Value;
-    cv_map(g.cv.empty() ? camera::BiasCrossValidation{"none", NAN, NAN} : g.cv.front());
+    cv_map(g.cv.empty() ? records::BiasCrossValidation{"none", NAN, NAN} : g.cv.front());
     if (g.cv.size() > 1) {
       out << YAML::Key << "cv_more" << YAML::Value << YAML::BeginSeq;
       for (size_t i = 1; i < g.cv.size(); ++i) cv_map(g.cv[i]);
@@ -150,11 +150,11 @@ std::string FormatWeightsYaml(const camera::BiasWeights& w) {
   return std::string(out.c_str()) + "\n";
 }
 
-void WriteWeightsYaml(const std::string& path, const camera::BiasWeights& weights) {
+void WriteWeightsYaml(const std::string& path, const records::BiasWeights& weights) {
   WriteFileAtomic(path, FormatWeightsYaml(weights));
 }
 
-camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file) {
+records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file) {
   const Reader r(file);
   YAML::Node root;
   try {
@@ -171,7 +171,7 @@ camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string&
   r.OnlyKeys(root, "",
              {"schema", "model", "target", "lambda", "loss", "loss_scale_m", "focal_px",
               "baseline_m", "group_by", "groups", "provenance"});
-  camera::BiasWeights w;
+  records::BiasWeights w;
   w.schema = kSchema;
   w.model = r.String(r.Need(root, "model", "model"), "model");
   if (root["target"]) w.target = r.String(root["target"], "target");
@@ -196,7 +196,7 @@ camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string&
     r.OnlyKeys(gn, p,
                {"light", "preset", "emitter", "n", "weights", "knots_deg", "rmse_m", "mae_m",
                 "residual_std_m", "cv", "cv_more", "covariance"});
-    camera::BiasWeightsGroup g;
+    records::BiasWeightsGroup g;
     g.light = r.String(r.Need(gn, "light", p + ".light"), p + ".light");
     g.preset = r.String(r.Need(gn, "preset", p + ".preset"), p + ".preset");
     if (gn["emitter"]) g.emitter = r.String(gn["emitter"], p + ".emitter");
@@ -249,7 +249,7 @@ camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string&
   return w;
 }
 
-camera::BiasWeights ReadWeightsYaml(const std::string& path) {
+records::BiasWeights ReadWeightsYaml(const std::string& path) {
   return ParseWeightsYaml(ReadFile(path), path);
 }
 

@@ -13,17 +13,17 @@
 
 #include <string>
 
-#include "camera/bias_weights.h"
+#include "records/bias_weights.h"
 #include "io/io_error.h"
 
 namespace depthbias::io {
 
-std::string FormatWeightsYaml(const camera::BiasWeights& weights);
-void WriteWeightsYaml(const std::string& path, const camera::BiasWeights& weights);
+std::string FormatWeightsYaml(const records::BiasWeights& weights);
+void WriteWeightsYaml(const std::string& path, const records::BiasWeights& weights);
 
 // Throws IoError naming the file and the key for a YAML of another schema, a missing key or a
 // value of the wrong type.
-camera::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file);
-camera::BiasWeights ReadWeightsYaml(const std::string& path);
+records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file);
+records::BiasWeights ReadWeightsYaml(const std::string& path);
 
 }  // namespace depthbias::io

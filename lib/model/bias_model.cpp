@@ -16,7 +16,7 @@ bool Matches(const std::string& key, const std::string& value) {
 
 }  // namespace
 
-ScenarioModel::ScenarioModel(const camera::BiasWeightsGroup& group,
+ScenarioModel::ScenarioModel(const records::BiasWeightsGroup& group,
                              const FormConstants& constants, const std::string& model)
     : group_(group) {
   FormConstants c = constants;
@@ -94,7 +94,7 @@ int ScenarioModel::CorrectCloud(std::vector<Eigen::Vector3d>* points) const {
   return failed;
 }
 
-BiasModel::BiasModel(const camera::BiasWeights& weights) : weights_(weights) {
+BiasModel::BiasModel(const records::BiasWeights& weights) : weights_(weights) {
   if (weights.groups.empty()) throw std::invalid_argument("the weights hold no group");
   FormConstants c;
   c.focal_px = weights.focal_px;

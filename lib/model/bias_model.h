@@ -2,7 +2,7 @@
 // A fitted bias model as a machine uses it: per scenario (light, preset), the bias predicted
 // at any measured depth Z and off-axis angle α, the corrected distance, its predictive
 // standard deviation, a safety margin, and the point-wise correction of a cloud.
-// Built from the weights record (camera/bias_weights.h) that io reads from the weights YAML.
+// Built from the weights record (records/bias_weights.h) that io reads from the weights YAML.
 
 #include <memory>
 #include <string>
@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "camera/bias_weights.h"
+#include "records/bias_weights.h"
 #include "model/forms.h"
 
 namespace depthbias::model {
@@ -19,7 +19,7 @@ class ScenarioModel {
  public:
   // Throws std::invalid_argument when the group does not match the form (names, sizes,
   // covariance shape).
-  ScenarioModel(const camera::BiasWeightsGroup& group, const FormConstants& constants,
+  ScenarioModel(const records::BiasWeightsGroup& group, const FormConstants& constants,
                 const std::string& model);
 
   // b(Z, α) = measured − nominal distance [m], as fitted.
@@ -39,10 +39,10 @@ class ScenarioModel {
   // Every point; returns how many could not be corrected (left unchanged).
   int CorrectCloud(std::vector<Eigen::Vector3d>* points_m) const;
 
-  const camera::BiasWeightsGroup& group() const { return group_; }
+  const records::BiasWeightsGroup& group() const { return group_; }
 
  private:
-  camera::BiasWeightsGroup group_;
+  records::BiasWeightsGroup group_;
   std::shared_ptr<const Form> form_;
   Eigen::MatrixXd covariance_;  // empty if unknown
 };
@@ -51,7 +51,7 @@ class BiasModel {
  public:
   // Throws std::invalid_argument with a one-line reason (unknown model, parameter names that
   // do not match it, a malformed covariance, no groups).
-  explicit BiasModel(const camera::BiasWeights& weights);
+  explicit BiasModel(const records::BiasWeights& weights);
 
   // The scenario for (light, preset[, emitter]); a group whose key is "*" matches any value.
   // Throws std::out_of_range naming the scenario and the ones the weights hold.
@@ -60,12 +60,12 @@ class BiasModel {
   bool Has(const std::string& light, const std::string& preset,
            const std::string& emitter = "*") const;
 
-  const camera::BiasWeights& weights() const { return weights_; }
+  const records::BiasWeights& weights() const { return weights_; }
 
  private:
   const ScenarioModel* Find(const std::string& light, const std::string& preset,
                             const std::string& emitter) const;
-  camera::BiasWeights weights_;
+  records::BiasWeights weights_;
   std::vector<ScenarioModel> scenarios_;
 };
 

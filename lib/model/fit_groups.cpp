@@ -18,7 +18,7 @@ bool FitGroupsParams::IsValid(std::string* why) const {
   return true;
 }
 
-FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows,
+FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
                     const FitGroupsParams& params) {
   FitReport report;
   const auto start = std::chrono::steady_clock::now();
@@ -149,8 +149,8 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
   return out;
 }
 
-camera::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params) {
-  camera::BiasWeights w;
+records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params) {
+  records::BiasWeights w;
   w.model = params.fit.model;
   w.lambda = params.fit.lambda;
   w.loss = LossName(ResolveLoss(params.fit.loss, params.fit.model));
@@ -159,7 +159,7 @@ camera::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& pa
   w.baseline_m = params.fit.baseline_m;
   w.group_by = params.group_by;
   for (const auto& gr : report.groups) {
-    camera::BiasWeightsGroup g;
+    records::BiasWeightsGroup g;
     g.light = gr.group.light;
     g.preset = gr.group.preset;
     g.emitter = gr.group.emitter;

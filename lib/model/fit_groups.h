@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "camera/bias_weights.h"
-#include "camera/panel_metrics.h"
+#include "records/bias_weights.h"
+#include "records/panel_metrics.h"
 #include "model/cv.h"
 #include "model/fit.h"
 #include "model/samples.h"
@@ -46,7 +46,7 @@ struct FitReport {
 // Fits every group; fails (success = false) if there is no "ok" row or any group's fit fails.
 // A cross-validation the design cannot support (e.g. leave-one-distance-out with two
 // distances) does not fail the run: its result says why and a warning names it.
-FitReport FitGroups(const std::vector<camera::PanelMetrics>& rows, const FitGroupsParams& params);
+FitReport FitGroups(const std::vector<records::PanelMetrics>& rows, const FitGroupsParams& params);
 
 // Every form × {none, huber} with the fit's other settings: the candidates of a nested check.
 std::vector<FitParams> DefaultCandidates(const FitParams& base);
@@ -56,6 +56,6 @@ std::vector<FitParams> DefaultCandidates(const FitParams& base);
 std::string FormatFitTable(const FitReport& report, const FitGroupsParams& params);
 
 // The weights record of a successful report (provenance left empty for the caller).
-camera::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params);
+records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params);
 
 }  // namespace depthbias::model

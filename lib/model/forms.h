@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "camera/intrinsics.h"
+
 namespace depthbias::model {
 
 // One sample as the forms see it.
@@ -27,8 +29,8 @@ struct ParamSpec {
 
 // Constants a form may need (from config: D455 defaults, or the recording).
 struct FormConstants {
-  double focal_px = 640.0;   // f: depth focal length
-  double baseline_m = 0.095; // B: stereo baseline
+  double focal_px = camera::D455::kFocalPx;     // f: depth focal length [px]
+  double baseline_m = camera::D455::kBaselineM;  // B: stereo baseline [m]
   std::vector<double> knots_deg;  // off-axis knots of "disp_knots", ascending
 };
 

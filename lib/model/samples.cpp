@@ -20,7 +20,7 @@ std::vector<double> Distinct(std::vector<double> v) {
 
 }  // namespace
 
-std::vector<Sample> MakeSamples(const std::vector<camera::PanelMetrics>& rows,
+std::vector<Sample> MakeSamples(const std::vector<records::PanelMetrics>& rows,
                                 const std::vector<size_t>& which, bool weight_by_valid_pixels) {
   std::vector<Sample> out;
   for (size_t i : which) {
@@ -58,7 +58,7 @@ std::string Group::Label() const {
   return label.empty() ? "all" : label;
 }
 
-std::vector<Group> GroupRows(const std::vector<camera::PanelMetrics>& rows,
+std::vector<Group> GroupRows(const std::vector<records::PanelMetrics>& rows,
                              const std::vector<std::string>& group_by) {
   bool by_light = false, by_preset = false, by_emitter = false;
   for (const auto& k : group_by) {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "camera/panel_metrics.h"
+#include "records/panel_metrics.h"
 #include "model/forms.h"
 
 namespace depthbias::model {
@@ -25,7 +25,7 @@ struct Sample {
 // weight_by_valid_pixels, each weight is the row's valid pixel count (valid_pct × region_px ×
 // frames, or valid_pct × frames where region_px is unknown) over the group's mean count, so
 // that the weights average 1.
-std::vector<Sample> MakeSamples(const std::vector<camera::PanelMetrics>& rows,
+std::vector<Sample> MakeSamples(const std::vector<records::PanelMetrics>& rows,
                                 const std::vector<size_t>& which, bool weight_by_valid_pixels);
 
 // A scenario: the rows sharing the grouping keys' values.
@@ -38,14 +38,14 @@ struct Group {
 };
 
 // A row can be fitted when it was measured ("ok") and has its ground truth (distance, angle).
-inline bool UsableForFit(const camera::PanelMetrics& r) {
+inline bool UsableForFit(const records::PanelMetrics& r) {
   return r.ok() && std::isfinite(r.distance_m) && std::isfinite(r.angle_deg);
 }
 
 // Keys allowed: light, preset, emitter (any subset, none = one group). Throws
 // std::invalid_argument naming an unknown key. Rows that are not UsableForFit are left out.
 // Groups come out sorted by their keys.
-std::vector<Group> GroupRows(const std::vector<camera::PanelMetrics>& rows,
+std::vector<Group> GroupRows(const std::vector<records::PanelMetrics>& rows,
                              const std::vector<std::string>& group_by);
 
 // Distinct values (to 1e-9) of distance_m / angle_deg in samples, ascending.

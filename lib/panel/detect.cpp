@@ -93,7 +93,7 @@ DepthAccumulator::DepthAccumulator(int width, int height)
       n_(static_cast<std::size_t>(width) * height, 0),
       sum_(static_cast<std::size_t>(width) * height, 0) {}
 
-void DepthAccumulator::Add(const camera::DepthFrame& frame) {
+void DepthAccumulator::Add(const records::DepthFrame& frame) {
   depth_units_m_ = frame.depth_units_m;
   if (frames_ > 0 && frames_ % 65535 == 0) {  // a 32-bit sum holds 65535 frames of 16-bit counts
     carry_.resize(sum_.size(), 0.0);

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "camera/depth_frame.h"
+#include "records/depth_frame.h"
 #include "panel/geometry.h"
 #include "panel/params.h"
 
@@ -19,7 +19,7 @@ namespace depthbias::panel {
 class DepthAccumulator {
  public:
   DepthAccumulator(int width, int height);
-  void Add(const camera::DepthFrame& frame);
+  void Add(const records::DepthFrame& frame);
   int width() const { return width_; }
   int height() const { return height_; }
   std::uint64_t frames() const { return frames_; }

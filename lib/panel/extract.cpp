@@ -8,7 +8,7 @@
 namespace depthbias::panel {
 namespace {
 
-bool FrameMatches(const camera::DepthFrame& f, const camera::Intrinsics& in, std::string* why) {
+bool FrameMatches(const records::DepthFrame& f, const camera::Intrinsics& in, std::string* why) {
   if (f.width != in.width || f.height != in.height ||
       f.counts.size() != static_cast<std::size_t>(in.width) * in.height) {
     *why = "frame " + std::to_string(f.frame_number) + " is " + std::to_string(f.width) + "x" +
@@ -26,7 +26,7 @@ bool FrameMatches(const camera::DepthFrame& f, const camera::Intrinsics& in, std
 // Adds every remaining frame of source to measurer; false (why set) at a frame that does not
 // match the intrinsics.
 bool MeasureAll(FrameSource& source, const camera::Intrinsics& intrinsics,
-                camera::DepthFrame* frame, RegionMeasurer* measurer, std::uint64_t* frames_read,
+                records::DepthFrame* frame, RegionMeasurer* measurer, std::uint64_t* frames_read,
                 std::string* why) {
   while (source.Next(frame)) {
     ++*frames_read;
@@ -60,7 +60,7 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
                 "depth stream has Modified Brown-Conrady distortion, which cannot be deprojected");
   }
   const RayTable rays(intrinsics);
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
 
   // Box mode: the region is given, one pass measures it.
   if (box) {
@@ -75,7 +75,7 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
       return Fail(&res, "error", why);
     // The box's centre ray gives a provisional direction; then the box's pixels on the fitted
     // plane give the panel's centre and size.
-    camera::PanelMetrics& m = res.metrics;
+    records::PanelMetrics& m = res.metrics;
     const Eigen::Vector2d c(0.5 * (box->u0 + box->u1 - 1), 0.5 * (box->v0 + box->v1 - 1));
     const Eigen::Vector2d cr = camera::PixelToNormalized(intrinsics, c);
     res.measure = measurer.Finish({cr.x(), cr.y(), 1.0}, &m);
@@ -121,7 +121,7 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   RegionMeasurer measurer(&rays, res.region, params.baseline_m);
   if (!MeasureAll(source, intrinsics, &frame, &measurer, &res.frames_read, &why))
     return Fail(&res, "error", why);
-  camera::PanelMetrics& m = res.metrics;
+  records::PanelMetrics& m = res.metrics;
   res.measure = measurer.Finish(res.detection.panel.center_m, &m);
   m.panel_width_m = res.detection.panel.width_m;
   m.panel_height_m = res.detection.panel.height_m;

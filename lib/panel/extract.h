@@ -6,9 +6,10 @@
 #include <optional>
 #include <string>
 
-#include "camera/depth_frame.h"
+#include "records/depth_frame.h"
+#include "records/frame_source.h"
 #include "camera/intrinsics.h"
-#include "camera/panel_metrics.h"
+#include "records/panel_metrics.h"
 #include "panel/detect.h"
 #include "panel/geometry.h"
 #include "panel/measure.h"
@@ -16,15 +17,7 @@
 
 namespace depthbias::panel {
 
-// A recording's depth frames, in order.
-class FrameSource {
- public:
-  virtual ~FrameSource() = default;
-  virtual bool Next(camera::DepthFrame* frame) = 0;  // false at the end
-  // Starts again from the first frame; false when the source cannot. The automatic mode reads
-  // the frames twice (detect, then measure); the box mode once.
-  virtual bool Rewind() { return false; }
-};
+using records::FrameSource;
 
 // The article's manual method: an image-aligned box [u0, u1) × [v0, v1) in pixels.
 struct PixelBox {
@@ -32,7 +25,7 @@ struct PixelBox {
 };
 
 struct ExtractResult {
-  camera::PanelMetrics metrics;  // status "ok", "no_panel" or "error", with message
+  records::PanelMetrics metrics;  // status "ok", "no_panel" or "error", with message
   PanelDetection detection;      // automatic mode only
   PanelRegion region;
   MeasureResult measure;

@@ -39,7 +39,7 @@ RegionMeasurer::RegionMeasurer(const RayTable* rays, PanelRegion region, double 
       depth_hist_(1u << 16, 0),
       range_hist_(kRangeBins, 0) {}
 
-void RegionMeasurer::Add(const camera::DepthFrame& frame) {
+void RegionMeasurer::Add(const records::DepthFrame& frame) {
   if (frames_ == 0) {
     depth_units_m_ = frame.depth_units_m;
   } else if (frame.depth_units_m != depth_units_m_) {
@@ -71,7 +71,7 @@ void RegionMeasurer::Add(const camera::DepthFrame& frame) {
 }
 
 MeasureResult RegionMeasurer::Finish(const Eigen::Vector3d& center_m,
-                                     camera::PanelMetrics* m) const {
+                                     records::PanelMetrics* m) const {
   MeasureResult res;
   res.frames = frames_;
   res.frames_with_depth = frames_with_depth_;

@@ -9,8 +9,8 @@
 
 #include <Eigen/Core>
 
-#include "camera/depth_frame.h"
-#include "camera/panel_metrics.h"
+#include "records/depth_frame.h"
+#include "records/panel_metrics.h"
 #include "panel/geometry.h"
 
 namespace depthbias::panel {
@@ -35,12 +35,12 @@ class RegionMeasurer {
   RegionMeasurer(const RayTable* rays, PanelRegion region, double baseline_m);
 
   // Adds one frame; the frame must match the rays' image size (checked by the caller).
-  void Add(const camera::DepthFrame& frame);
+  void Add(const records::DepthFrame& frame);
 
   // Fills the depth columns of metrics (frames, mean, median, plane std from the orthogonal fit,
   // hole rate, range, normal tilt and subpixel RMS from the disparity plane, region_px, temporal
   // std); azimuth and elevation come from center_m, the panel centre on its plane.
-  MeasureResult Finish(const Eigen::Vector3d& center_m, camera::PanelMetrics* metrics) const;
+  MeasureResult Finish(const Eigen::Vector3d& center_m, records::PanelMetrics* metrics) const;
 
   const PanelRegion& region() const { return region_; }
 

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "camera/intrinsics.h"
+
 namespace depthbias::panel {
 
 struct PanelParams {
@@ -16,7 +18,7 @@ struct PanelParams {
   double size_tolerance = 0.4;  // accepted relative size error of a candidate (0.4 = ±40 %)
 
   // Sensor (for noise-aware thresholds and disparity-unit metrics).
-  double baseline_m = 0.095;               // stereo baseline B (D455)
+  double baseline_m = camera::D455::kBaselineM;  // stereo baseline B [m]
   double expected_subpixel_rms_px = 0.08;  // disparity noise σ_d used for inlier thresholds
 
   // Accumulation: the first detection_frames frames of the static scene are pooled for

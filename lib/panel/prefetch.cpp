@@ -30,7 +30,7 @@ void PrefetchSource::Stop() {
 
 void PrefetchSource::Run() {
   for (;;) {
-    camera::DepthFrame frame;
+    records::DepthFrame frame;
     {
       std::unique_lock<std::mutex> lock(mu_);
       cv_.wait(lock, [&] { return stop_ || ready_.size() < depth_; });
@@ -61,7 +61,7 @@ void PrefetchSource::Run() {
   }
 }
 
-bool PrefetchSource::Next(camera::DepthFrame* frame) {
+bool PrefetchSource::Next(records::DepthFrame* frame) {
   std::unique_lock<std::mutex> lock(mu_);
   cv_.wait(lock, [&] { return !ready_.empty() || done_; });
   if (ready_.empty()) {

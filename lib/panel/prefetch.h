@@ -22,7 +22,7 @@ class PrefetchSource : public FrameSource {
   PrefetchSource& operator=(const PrefetchSource&) = delete;
 
   // Rethrows, in the caller's thread, whatever the inner source threw.
-  bool Next(camera::DepthFrame* frame) override;
+  bool Next(records::DepthFrame* frame) override;
   bool Rewind() override;
 
  private:
@@ -35,8 +35,8 @@ class PrefetchSource : public FrameSource {
   std::thread thread_;
   std::mutex mu_;
   std::condition_variable cv_;
-  std::deque<camera::DepthFrame> ready_;
-  std::vector<camera::DepthFrame> spare_;
+  std::deque<records::DepthFrame> ready_;
+  std::vector<records::DepthFrame> spare_;
   bool done_ = false;
   bool stop_ = false;
   std::exception_ptr error_;

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace depthbias::camera {
+namespace depthbias::records {
 
 struct BiasCrossValidation {
   std::string scheme;   // "point" (leave one test point out), "distance", or "none"
@@ -48,4 +48,4 @@ struct BiasWeights {
   std::string tool_version;
 };
 
-}  // namespace depthbias::camera
+}  // namespace depthbias::records

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace depthbias::camera {
+namespace depthbias::records {
 
 struct DepthFrame {
   int width = 0;                 // [px]
@@ -18,4 +18,4 @@ struct DepthFrame {
   double DepthAt(int u, int v) const { return at(u, v) * depth_units_m; }
 };
 
-}  // namespace depthbias::camera
+}  // namespace depthbias::records

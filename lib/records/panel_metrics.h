@@ -7,7 +7,7 @@
 #include <limits>
 #include <string>
 
-namespace depthbias::camera {
+namespace depthbias::records {
 
 struct PanelMetrics {
   static constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();
@@ -43,4 +43,4 @@ struct PanelMetrics {
   bool ok() const { return status == "ok"; }
 };
 
-}  // namespace depthbias::camera
+}  // namespace depthbias::records

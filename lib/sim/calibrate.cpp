@@ -24,7 +24,7 @@ double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 class ScenarioResiduals {
  public:
   ScenarioResiduals(const SimParams& base, std::vector<Cell> cells,
-                    std::vector<camera::PanelMetrics> real, const CalibrateParams& cp)
+                    std::vector<records::PanelMetrics> real, const CalibrateParams& cp)
       : base_(base), cells_(std::move(cells)), real_(std::move(real)), cp_(cp) {}
 
   int num_residuals() const { return 2 * static_cast<int>(cells_.size()); }
@@ -37,12 +37,12 @@ class ScenarioResiduals {
   }
 
   // Simulated metrics of every recording under scenario s.
-  std::vector<camera::PanelMetrics> Simulate(const ScenarioParams& s) const {
+  std::vector<records::PanelMetrics> Simulate(const ScenarioParams& s) const {
     SimParams p = base_;
     p.sensor.scenarios = {s};
     MetricsParams mp = cp_.metrics;
     mp.frames = cp_.frames;
-    std::vector<camera::PanelMetrics> out;
+    std::vector<records::PanelMetrics> out;
     for (auto& r : SimulateCellsMetrics(p, cells_, mp)) out.push_back(r.metrics);
     return out;
   }
@@ -50,7 +50,7 @@ class ScenarioResiduals {
   bool operator()(double const* const* x, double* residuals) const {
     const ScenarioParams s = Decode(x[0], scenario_);
     if (!std::isfinite(s.sigma_d_px)) return false;
-    const std::vector<camera::PanelMetrics> sim = Simulate(s);
+    const std::vector<records::PanelMetrics> sim = Simulate(s);
     for (size_t i = 0; i < cells_.size(); ++i) {
       const double real_std = real_[i].plane_std_m;
       const double sim_std = std::isfinite(sim[i].plane_std_m)
@@ -67,12 +67,12 @@ class ScenarioResiduals {
 
   void set_scenario(const ScenarioParams& s) { scenario_ = s; }
   const std::vector<Cell>& cells() const { return cells_; }
-  const std::vector<camera::PanelMetrics>& real() const { return real_; }
+  const std::vector<records::PanelMetrics>& real() const { return real_; }
 
  private:
   SimParams base_;
   std::vector<Cell> cells_;
-  std::vector<camera::PanelMetrics> real_;
+  std::vector<records::PanelMetrics> real_;
   CalibrateParams cp_;
   ScenarioParams scenario_;
 };
@@ -99,7 +99,7 @@ bool CalibrateParams::IsValid(std::string* why) const {
 }
 
 CalibrationResult CalibrateSensor(const SimParams& params,
-                                  const std::vector<camera::PanelMetrics>& real,
+                                  const std::vector<records::PanelMetrics>& real,
                                   const CalibrateParams& cp) {
   CalibrationResult result;
   result.sensor = params.sensor;
@@ -112,7 +112,7 @@ CalibrationResult CalibrateSensor(const SimParams& params,
   // Group the usable rows by scenario, in first-seen order.
   std::vector<std::pair<std::string, std::string>> order;
   std::map<std::pair<std::string, std::string>, std::pair<std::vector<Cell>,
-                                                          std::vector<camera::PanelMetrics>>>
+                                                          std::vector<records::PanelMetrics>>>
       groups;
   for (const auto& row : real) {
     const bool has_target = (std::isfinite(row.plane_std_m) && row.plane_std_m > 0) ||
@@ -179,7 +179,7 @@ CalibrationResult CalibrateSensor(const SimParams& params,
     fit.report = summary.BriefReport();
 
     // The fitted simulation beside the real rows.
-    const std::vector<camera::PanelMetrics> sim = functor->Simulate(fit.fitted);
+    const std::vector<records::PanelMetrics> sim = functor->Simulate(fit.fitted);
     double sum_log = 0, sum_valid = 0;
     int n_log = 0, n_valid = 0;
     for (size_t i = 0; i < cells.size(); ++i) {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "camera/panel_metrics.h"
+#include "records/panel_metrics.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {
@@ -70,7 +70,7 @@ struct CalibrationResult {
 // Fits every (light, preset) the real table holds. The protocol's scene and distance meaning,
 // the effects and the seed in params are used as given; params.sensor's scenarios are the start.
 CalibrationResult CalibrateSensor(const SimParams& params,
-                                  const std::vector<camera::PanelMetrics>& real,
+                                  const std::vector<records::PanelMetrics>& real,
                                   const CalibrateParams& calibrate = {});
 
 // The fit as a plain table: one line per recording (real and simulated plane_std and

@@ -16,7 +16,7 @@ namespace {
 bool RenderRecording(const SimParams& params, const Cell& cell, int threads,
                      const RecordingOutput& out, const std::atomic<bool>& stop) {
   const StereoSim simulator(params, cell, threads);
-  camera::DepthFrame frames[2];
+  records::DepthFrame frames[2];
   const int n = params.protocol.frames;
   if (threads < 2) {
     for (int k = 0; k < n; ++k) {

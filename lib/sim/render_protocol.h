@@ -7,14 +7,14 @@
 #include <functional>
 #include <vector>
 
-#include "camera/depth_frame.h"
+#include "records/depth_frame.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {
 
 // Where one recording's frames go. Both are called on the thread rendering the recording.
 struct RecordingOutput {
-  std::function<void(const camera::DepthFrame&)> write;  // frame by frame, in order
+  std::function<void(const records::DepthFrame&)> write;  // frame by frame, in order
   std::function<void()> close;                            // after the last frame
 };
 // Opens the output of a recording; called on the thread that will render it.

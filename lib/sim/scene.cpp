@@ -1,5 +1,7 @@
 #include "sim/scene.h"
 
+#include "camera/presets.h"
+
 #include <cmath>
 #include <sstream>
 
@@ -77,7 +79,8 @@ bool ProtocolParams::IsValid(std::string* why) const {
     if (!(std::fabs(a) < 60)) return Fail(why, "angles_deg must be in (-60, 60)");
   for (const auto& p : presets) {
     double v;
-    if (!PresetOptionValue(p, &v)) return Fail(why, "unknown preset '" + p + "' (HA or HD)");
+    if (!camera::PresetOptionValue(p, &v) || (v != 3 && v != 4))
+      return Fail(why, "unknown preset '" + p + "' (HA or HD)");
   }
   if (frames < 1) return Fail(why, "frames must be >= 1");
   if (!(fps > 0)) return Fail(why, "fps must be > 0");
@@ -106,17 +109,6 @@ std::vector<Cell> MakeCells(const ProtocolParams& p) {
             cells.push_back(c);
           }
   return cells;
-}
-
-bool PresetOptionValue(const std::string& preset, double* value) {
-  if (preset == "HA") {
-    *value = 3;
-  } else if (preset == "HD") {
-    *value = 4;
-  } else {
-    return false;
-  }
-  return true;
 }
 
 Eigen::Matrix3d LevelFromCamera(const SceneParams& scene) {

@@ -65,8 +65,6 @@ struct ProtocolParams {
 std::vector<Cell> MakeCells(const ProtocolParams& protocol);
 std::string CellName(const Cell& cell);
 
-// Visual_Preset option values the D455 records (3 = High Accuracy, 4 = High Density).
-bool PresetOptionValue(const std::string& preset, double* value);
 
 // Where the panel stands, in the camera frame.
 struct PanelPose {

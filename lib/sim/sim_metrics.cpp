@@ -45,7 +45,7 @@ Window PanelWindow(const SimParams& params, const Cell& cell, int pad) {
 }
 
 double Median(std::vector<double> v) {
-  if (v.empty()) return camera::PanelMetrics::kMissing;
+  if (v.empty()) return records::PanelMetrics::kMissing;
   const size_t mid = v.size() / 2;
   std::nth_element(v.begin(), v.begin() + mid, v.end());
   double m = v[mid];
@@ -65,7 +65,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   const int frames = mp.frames > 0 ? mp.frames : params.protocol.frames;
 
   CellMetricsResult result;
-  camera::PanelMetrics& m = result.metrics;
+  records::PanelMetrics& m = result.metrics;
   m.bag = cell.name + ".bag";
   m.light = cell.light;
   m.emitter = cell.emitter_on ? "on" : "off";

@@ -372,7 +372,7 @@ inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
 
 }  // namespace
 
-void StereoSim::Render(int frame_index, camera::DepthFrame* frame, int threads) const {
+void StereoSim::Render(int frame_index, records::DepthFrame* frame, int threads) const {
   const auto& in = params_.sensor.intrinsics;
   const auto& proto = params_.protocol;
   frame->width = in.width;

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "camera/depth_frame.h"
-#include "camera/panel_metrics.h"
+#include "records/depth_frame.h"
+#include "records/panel_metrics.h"
 #include "sim/effects.h"
 #include "sim/scene.h"
 #include "sim/sensor.h"
@@ -68,7 +68,7 @@ class StereoSim {
 
   // Frame k (from 0) of the recording: full image size, 0 outside the window. Rows are split
   // over `threads` threads (the pixels do not depend on it).
-  void Render(int frame_index, camera::DepthFrame* frame, int threads = 1) const;
+  void Render(int frame_index, records::DepthFrame* frame, int threads = 1) const;
   // Depth counts of the listed pixels in frame k: the same values Render gives them.
   void RenderPixels(int frame_index, const PixelList& pixels,
                     std::vector<std::uint16_t>* counts) const;
@@ -118,7 +118,7 @@ struct MetricsParams {
 // One recording's metrics (DESIGN.md's panel-metrics row), evaluated on the panel's image
 // footprint without rendering whole frames. bag = the recording's name + ".bag".
 struct CellMetricsResult {
-  camera::PanelMetrics metrics;
+  records::PanelMetrics metrics;
   CellTruth truth;
   int region_px = 0;
 };

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "camera/intrinsics.h"
+#include "camera/presets.h"
 #include "io/bag.h"
 
 namespace depthbias::io {
@@ -69,7 +70,7 @@ class TempDir {
 BagError::Kind ExpectBagError(const std::string& path, ReadOptions options = {}) {
   try {
     BagReader reader(path, options);
-    camera::DepthFrame frame;
+    records::DepthFrame frame;
     while (reader.Next(&frame)) {
     }
   } catch (const BagError& e) {
@@ -152,7 +153,7 @@ TEST_P(RecordedBag, ReturnsExactlyWhatTheRecorderWasGiven) {
   EXPECT_NEAR(info.first_timestamp_ms, frames[0]["timestamp_ms"].as<double>(), 1e-6);
   EXPECT_NEAR(info.last_timestamp_ms, frames[frames.size() - 1]["timestamp_ms"].as<double>(),
               1e-6);
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
   std::size_t i = 0;
   for (; reader.Next(&frame); ++i) {
     ASSERT_LT(i, frames.size());
@@ -206,7 +207,7 @@ TEST_P(RecordedBag, AgreesWithRosbagStorage) {
   BagReader reader(path);
   rosbag::Bag bag(path, rosbag::bagmode::Read);
   rosbag::View view(bag, rosbag::TopicQuery(reader.info().depth.topic));
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
   std::size_t n = 0;
   for (const rosbag::MessageInstance& m : view) {
     const sensor_msgs::Image::ConstPtr image = m.instantiate<sensor_msgs::Image>();
@@ -251,7 +252,7 @@ TEST(RecordedBagRechunked, OneMessagePerChunkGivesTheSameFrames) {
     EXPECT_EQ(reader.info().streams.size(), 4u);
     EXPECT_EQ(reader.info().depth_frames, truth.node["frames"].size());
     EXPECT_EQ(reader.info().options.at("Visual_Preset"), 4.0);
-    camera::DepthFrame f;
+    records::DepthFrame f;
     std::size_t i = 0;
     for (; reader.Next(&f); ++i) {
       ASSERT_LT(i, truth.node["frames"].size());
@@ -276,7 +277,7 @@ TEST(RecordedBagThreads, ReadersOnSeveralThreadsAtOnce) {
       try {
         for (int round = 0; round < 8; ++round) {
           BagReader reader(FixturePath(names[t]));
-          camera::DepthFrame f;
+          records::DepthFrame f;
           while (reader.Next(&f)) ++frames[t];
         }
       } catch (const std::exception& e) {
@@ -292,11 +293,11 @@ TEST(RecordedBagThreads, ReadersOnSeveralThreadsAtOnce) {
 }
 
 TEST(PresetName, FollowsTheD455Numbering) {
-  EXPECT_EQ(PresetName(3), "HA");
-  EXPECT_EQ(PresetName(4), "HD");
-  EXPECT_EQ(PresetName(0), "Custom");
-  EXPECT_EQ(PresetName(9), "preset 9");
-  EXPECT_EQ(PresetName(3.5), "preset 3.5");
+  EXPECT_EQ(camera::PresetName(3), "HA");
+  EXPECT_EQ(camera::PresetName(4), "HD");
+  EXPECT_EQ(camera::PresetName(0), "Custom");
+  EXPECT_EQ(camera::PresetName(9), "preset 9");
+  EXPECT_EQ(camera::PresetName(3.5), "preset 3.5");
 }
 
 // ---------------------------------------------------------------- BagWriter round trips
@@ -323,8 +324,8 @@ BagWriterConfig TestConfig(int width, int height, bool lz4, double units_m) {
   return c;
 }
 
-camera::DepthFrame TestFrame(int width, int height, int i, double units_m) {
-  camera::DepthFrame f;
+records::DepthFrame TestFrame(int width, int height, int i, double units_m) {
+  records::DepthFrame f;
   f.width = width;
   f.height = height;
   f.depth_units_m = units_m;
@@ -370,10 +371,10 @@ TEST_P(WriterRoundTrip, ReadsBackEveryFrameAndSetting) {
   EXPECT_EQ(info.device.at("Serial Number"), "007");
   EXPECT_NEAR(info.first_timestamp_ms, TestFrame(w, h, 0, 0.0001).timestamp_ms, 1e-3);
   EXPECT_NEAR(info.last_timestamp_ms, TestFrame(w, h, n - 1, 0.0001).timestamp_ms, 1e-3);
-  camera::DepthFrame f;
+  records::DepthFrame f;
   int i = 0;
   for (; reader.Next(&f); ++i) {
-    const camera::DepthFrame want = TestFrame(w, h, i, 0.0001);
+    const records::DepthFrame want = TestFrame(w, h, i, 0.0001);
     EXPECT_EQ(f.frame_number, want.frame_number);
     EXPECT_NEAR(f.timestamp_ms, want.timestamp_ms, 1e-3);
     EXPECT_EQ(f.counts, want.counts) << i;
@@ -397,7 +398,7 @@ TEST(BagWriter, BagsReadByRosbagStorage) {
       ASSERT_TRUE(image);
       EXPECT_EQ(image->encoding, "mono16");
       EXPECT_EQ(image->header.frame_id, "1");
-      const camera::DepthFrame want = TestFrame(64, 48, i, 0.001);
+      const records::DepthFrame want = TestFrame(64, 48, i, 0.001);
       ASSERT_EQ(image->data.size(), want.counts.size() * 2);
       EXPECT_EQ(std::memcmp(image->data.data(), want.counts.data(), image->data.size()), 0);
       ++i;
@@ -417,7 +418,7 @@ TEST(BagWriter, FramesWithoutTheirOwnUnitsUseTheDepthUnitsOption) {
   }
   {
     BagReader reader(path);
-    camera::DepthFrame f;
+    records::DepthFrame f;
     ASSERT_TRUE(reader.Next(&f));
     EXPECT_EQ(f.depth_units_m, static_cast<double>(0.0001f));  // the frame's own units win
   }
@@ -429,7 +430,7 @@ TEST(BagWriter, FramesWithoutTheirOwnUnitsUseTheDepthUnitsOption) {
   WriteBytes(path, bytes);
   BagReader reader(path);
   EXPECT_EQ(reader.info().depth_units_m, static_cast<double>(0.001f));
-  camera::DepthFrame f;
+  records::DepthFrame f;
   int n = 0;
   for (; reader.Next(&f); ++n) {
     EXPECT_EQ(f.depth_units_m, static_cast<double>(0.001f));
@@ -522,7 +523,7 @@ TEST(BadInput, TruncatedBagGivesTheFramesBeforeTheDamageWhenAsked) {
 
     BagReader reader(cut, ReadOptions{true});
     EXPECT_FALSE(reader.info().indexed);
-    camera::DepthFrame f;
+    records::DepthFrame f;
     int i = 0;
     for (; reader.Next(&f); ++i) EXPECT_EQ(f.counts, TestFrame(w, h, i, 0.001).counts) << i;
     EXPECT_GT(i, 0) << "lz4 " << lz4;
@@ -540,7 +541,7 @@ TEST(BadInput, TruncatedRecordingGivesItsFirstFramesWhenAsked) {
   // Cut inside the pixels of the last frame.
   WriteBytes(cut, bytes.substr(0, bytes.rfind("mono16") + 100));
   BagReader reader(cut, ReadOptions{true});
-  camera::DepthFrame f;
+  records::DepthFrame f;
   std::size_t i = 0;
   for (; reader.Next(&f); ++i) {
     const auto pixels = truth.node["frames"][i]["pixels"].as<std::vector<int>>();
@@ -561,7 +562,7 @@ TEST(BadInput, CorruptedCompressedChunk) {
   // Asking for a partial read gives no frame from the damaged chunk, and no crash.
   try {
     BagReader reader(bad, ReadOptions{true});
-    camera::DepthFrame f;
+    records::DepthFrame f;
     while (reader.Next(&f)) {
     }
     EXPECT_FALSE(reader.damage().empty());
@@ -671,7 +672,7 @@ TEST(BadInput, DamagedMessageOffsetsInTheIndex) {
         ++runs;
         try {
           BagReader reader(path);
-          camera::DepthFrame f;
+          records::DepthFrame f;
           while (reader.Next(&f)) {
           }
         } catch (const BagError& e) {
@@ -709,7 +710,7 @@ TEST(BadInput, RandomDamageNeverCrashes) {
         ++runs;
         try {
           BagReader reader(path, ReadOptions{partial});
-          camera::DepthFrame f;
+          records::DepthFrame f;
           int frames = 0;
           while (reader.Next(&f) && frames < 1000) ++frames;
         } catch (const BagError& e) {

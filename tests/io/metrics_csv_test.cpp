@@ -42,7 +42,7 @@ TEST(MetricsCsv, ReadsTheArticlesTable) {
 }
 
 TEST(MetricsCsv, WriteThenReadRoundTripsEveryColumn) {
-  camera::PanelMetrics m;
+  records::PanelMetrics m;
   m.bag = "a, b.bag";
   m.light = "daylight";
   m.emitter = "on";
@@ -64,7 +64,7 @@ TEST(MetricsCsv, WriteThenReadRoundTripsEveryColumn) {
   m.region_px = 1234;
   m.subpixel_rms_px = 0.07;
   m.temporal_std_m = 0.004;
-  camera::PanelMetrics failed;
+  records::PanelMetrics failed;
   failed.bag = "broken.bag";
   failed.distance_m = 8;
   failed.angle_deg = 0;

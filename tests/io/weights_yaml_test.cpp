@@ -7,15 +7,15 @@
 namespace depthbias::io {
 namespace {
 
-camera::BiasWeights Example() {
-  camera::BiasWeights w;
+records::BiasWeights Example() {
+  records::BiasWeights w;
   w.model = "disp_knots";
   w.lambda = 0.001;
   w.loss = "huber";
   w.focal_px = 640;
   w.baseline_m = 0.095;
   w.group_by = {"light", "preset"};
-  camera::BiasWeightsGroup g;
+  records::BiasWeightsGroup g;
   g.light = "daylight";
   g.preset = "HA";
   g.n = 32;

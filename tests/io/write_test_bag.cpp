@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
     try {
       depthbias::io::BagWriter writer(path, c);
       for (int i = 0; i < s.frames; ++i) {
-        depthbias::camera::DepthFrame f;
+        depthbias::records::DepthFrame f;
         f.width = s.width;
         f.height = s.height;
         f.depth_units_m = s.units_m;

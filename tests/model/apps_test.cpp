@@ -86,7 +86,7 @@ TEST(FitBiasApp, ReproducesTable6OnTheArticlesData) {
                                                              {"sunset/HD", {-0.279, -0.358}}};
   for (size_t r6 = 0; r6 < t.rows.size(); ++r6) {
     const std::string key = t.Cell(r6, 0) + "/" + t.Cell(r6, 1);
-    const camera::BiasWeightsGroup* g = nullptr;
+    const records::BiasWeightsGroup* g = nullptr;
     for (const auto& x : w.groups) {
       if (x.light + "/" + x.preset == key) g = &x;
     }

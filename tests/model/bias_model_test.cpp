@@ -9,14 +9,14 @@ namespace depthbias::model {
 namespace {
 
 // Rows of two scenarios generated from known disparity models.
-std::vector<camera::PanelMetrics> Rows() {
-  std::vector<camera::PanelMetrics> rows;
+std::vector<records::PanelMetrics> Rows() {
+  std::vector<records::PanelMetrics> rows;
   for (const char* preset : {"HA", "HD"}) {
     const double delta = std::string(preset) == "HA" ? 0.25 : -0.2;
     const auto s = testing::DisparityTruth(delta, [](double a) { return 1.0 - 0.002 * a; },
                                            0.02, 4);
     for (size_t i = 0; i < s.size(); ++i) {
-      camera::PanelMetrics m;
+      records::PanelMetrics m;
       m.bag = std::string(preset) + std::to_string(i);
       m.light = "daylight";
       m.preset = preset;
@@ -32,7 +32,7 @@ std::vector<camera::PanelMetrics> Rows() {
   return rows;
 }
 
-camera::BiasWeights Weights() {
+records::BiasWeights Weights() {
   FitGroupsParams p;
   const FitReport report = FitGroups(Rows(), p);
   EXPECT_TRUE(report.success) << report.message;
@@ -42,12 +42,12 @@ camera::BiasWeights Weights() {
 TEST(FitGroups, RefusesMeasuredRowsWithoutGroundTruthAndSkipsFailedOnes) {
   auto rows = Rows();
   rows[3].status = "no_panel";
-  rows[3].distance_m = camera::PanelMetrics::kMissing;
+  rows[3].distance_m = records::PanelMetrics::kMissing;
   FitGroupsParams p;
   const FitReport skipped = FitGroups(rows, p);
   ASSERT_TRUE(skipped.success) << skipped.message;
   EXPECT_EQ(skipped.rows_skipped, 1);
-  rows[5].angle_deg = camera::PanelMetrics::kMissing;
+  rows[5].angle_deg = records::PanelMetrics::kMissing;
   const FitReport refused = FitGroups(rows, p);
   EXPECT_FALSE(refused.success);
   EXPECT_NE(refused.message.find(rows[5].bag), std::string::npos) << refused.message;
@@ -138,7 +138,7 @@ TEST(FitGroups, GroupWithTooFewRowsFailsNamingIt) {
 }
 
 TEST(FitGroups, CrossValidationTheDesignCannotSupportIsAWarning) {
-  std::vector<camera::PanelMetrics> rows;
+  std::vector<records::PanelMetrics> rows;
   for (const auto& r : Rows()) {
     if (r.distance_m <= 8) rows.push_back(r);  // two distances: one left out leaves one
   }

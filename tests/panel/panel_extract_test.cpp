@@ -84,7 +84,7 @@ struct Errors {
 };
 
 // Compares one metrics row (and its panels.json entry) with the truth.
-Errors Compare(const camera::PanelMetrics& m, const YAML::Node& panel, const YAML::Node& t) {
+Errors Compare(const records::PanelMetrics& m, const YAML::Node& panel, const YAML::Node& t) {
   const double z = t["true_median_depth_m"].as<double>();
   Errors e;
   e.median_m = m.median_m - z;
@@ -134,7 +134,7 @@ TEST(PanelExtract, MeasuresEveryTestPointWithinTolerance) {
               "median_err", "tol", "IoU", "hole", "azim", "tilt", "median_err", "hole", "azim",
               "tilt");
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    const camera::PanelMetrics& m = rows[k];
+    const records::PanelMetrics& m = rows[k];
     ASSERT_EQ(m.status, "ok") << m.bag << ": " << m.message;
     ASSERT_EQ(box_rows[k].bag, m.bag);
     ASSERT_EQ(box_rows[k].status, "ok") << m.bag << ": " << box_rows[k].message;

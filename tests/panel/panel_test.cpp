@@ -16,7 +16,7 @@ using test::SceneSpec;
 class VectorSource : public FrameSource {
  public:
   explicit VectorSource(const Scene* scene) : scene_(scene) {}
-  bool Next(camera::DepthFrame* f) override {
+  bool Next(records::DepthFrame* f) override {
     if (k_ >= scene_->spec.frames) return false;
     *f = scene_->Frame(k_++);
     return true;

@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "camera/depth_frame.h"
+#include "records/depth_frame.h"
 #include "camera/intrinsics.h"
 
 namespace depthbias::panel::test {
@@ -99,11 +99,11 @@ struct Scene {
   }
 
   // Frame k: disparity f·B/Z plus Gaussian noise, quantized to 1/32 px, back to 1 mm counts.
-  camera::DepthFrame Frame(int k) const {
+  records::DepthFrame Frame(int k) const {
     std::mt19937_64 rng(spec.seed * 1000003u + k);
     std::normal_distribution<double> noise(0.0, spec.noise_px);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
-    camera::DepthFrame f;
+    records::DepthFrame f;
     f.width = in.width;
     f.height = in.height;
     f.frame_number = k;

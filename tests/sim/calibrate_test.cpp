@@ -14,7 +14,7 @@ TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
   truth.protocol.angles_deg = {0, 20};
   truth.protocol.emitters = {false};
   truth.protocol.presets = {"HA", "HD"};
-  std::vector<camera::PanelMetrics> table;
+  std::vector<records::PanelMetrics> table;
   MetricsParams mp;
   mp.frames = CalibrateParams{}.frames;
   for (const Cell& c : MakeCells(truth.protocol)) {
@@ -22,7 +22,7 @@ TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
     table.push_back(SimulateMetrics(truth, c, mp).metrics);
   }
   ASSERT_EQ(table.size(), 12u);
-  camera::PanelMetrics broken = table[0];
+  records::PanelMetrics broken = table[0];
   broken.status = "no_panel";
   table.push_back(broken);
 
@@ -49,7 +49,7 @@ TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
 }
 
 TEST(Calibrate, SaysWhyWithoutUsableRows) {
-  camera::PanelMetrics row;
+  records::PanelMetrics row;
   row.status = "error";
   const CalibrationResult r = CalibrateSensor(SimParams{}, {row});
   EXPECT_FALSE(r.success);

@@ -33,7 +33,7 @@ SimParams SmallProtocol() {
 // Frames kept in memory per recording, with the calls each output saw.
 struct Collected {
   std::mutex mutex;
-  std::map<std::string, std::vector<camera::DepthFrame>> frames;
+  std::map<std::string, std::vector<records::DepthFrame>> frames;
   std::map<std::string, int> closed;
 };
 
@@ -43,7 +43,7 @@ OpenRecording Collect(Collected* c) {
       std::lock_guard<std::mutex> lock(c->mutex);
       c->frames[cell.name];  // opened
     }
-    return RecordingOutput{[c, name = cell.name](const camera::DepthFrame& f) {
+    return RecordingOutput{[c, name = cell.name](const records::DepthFrame& f) {
                              std::lock_guard<std::mutex> lock(c->mutex);
                              c->frames[name].push_back(f);
                            },
@@ -72,7 +72,7 @@ TEST(RenderProtocol, EveryRecordingInOrderWhateverTheThreads) {
     EXPECT_EQ(one.closed[cells[i].name], 1);
     const StereoSim sim(p, cells[i]);
     for (int k = 0; k < 3; ++k) {
-      camera::DepthFrame expected;
+      records::DepthFrame expected;
       sim.Render(k, &expected);
       EXPECT_EQ(frames[k].frame_number, static_cast<std::uint64_t>(k) + 1);
       EXPECT_TRUE(frames[k].counts == expected.counts) << cells[i].name << " frame " << k;
@@ -102,7 +102,7 @@ TEST(RenderProtocol, AnOutputErrorStopsTheRunAndIsRethrown) {
       std::lock_guard<std::mutex> lock(mutex);
       ++opened[cell.name];
       const std::string name = cell.name;
-      return RecordingOutput{[name, &bad](const camera::DepthFrame& f) {
+      return RecordingOutput{[name, &bad](const records::DepthFrame& f) {
                                if (name == bad && f.frame_number == 2)
                                  throw std::runtime_error("disk full");
                              },
@@ -143,7 +143,7 @@ TEST(RenderProtocol, OddWidthsAndWindowsDrawEveryPixelAsRenderPixels) {
         all.image.push_back(static_cast<std::uint64_t>(w.v0 + v) * 321 + w.u0 + u);
       }
     for (int k : {0, 1}) {
-      camera::DepthFrame frame;
+      records::DepthFrame frame;
       sim.Render(k, &frame);
       std::vector<std::uint16_t> expected;
       sim.RenderPixels(k, all, &expected);

@@ -34,7 +34,7 @@ Cell MakeCell(double distance_m, double angle_deg, const std::string& preset = "
 }
 
 // Metrics with the edge band (1 px) outside the region unless a margin is given.
-camera::PanelMetrics Metrics(const SimParams& p, const Cell& c, double margin_px = 3) {
+records::PanelMetrics Metrics(const SimParams& p, const Cell& c, double margin_px = 3) {
   MetricsParams mp;
   mp.region_margin_px = margin_px;
   const CellMetricsResult r = SimulateMetrics(p, c, mp);
@@ -54,7 +54,7 @@ double QuantumM(double z) { return z * z / kFB / 32.0; }
 TEST(StereoSim, SameSeedSameFramesOtherSeedOthers) {
   SimParams p = Base();
   const Cell c = MakeCell(8, 10);
-  camera::DepthFrame a, b, other;
+  records::DepthFrame a, b, other;
   StereoSim(p, c).Render(3, &a);
   StereoSim(p, c).Render(3, &b);
   p.seed = 8;
@@ -78,7 +78,7 @@ TEST(StereoSim, WholeFramesAndTheFootprintGiveTheSamePixels) {
   const StereoSim part(p, c, window);
   const PixelList part_panel = part.PanelPixels(3);
   ASSERT_GT(part_panel.size(), 100u);
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
   std::vector<std::uint16_t> counts;
   for (int k : {0, 5}) {
     whole.Render(k, &frame);
@@ -98,7 +98,7 @@ TEST(StereoSim, MetricsOnlyEqualsMetricsOfRenderedFrames) {
   const PixelList region = sim.RegionPixels(3);
   std::vector<double> z;
   size_t total = 0;
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
   for (int k = 0; k < p.protocol.frames; ++k) {
     sim.Render(k, &frame);
     for (int i : region.window) {
@@ -106,7 +106,7 @@ TEST(StereoSim, MetricsOnlyEqualsMetricsOfRenderedFrames) {
       if (frame.counts[i]) z.push_back(frame.counts[i] * 0.001);
     }
   }
-  const camera::PanelMetrics m = Metrics(p, c);
+  const records::PanelMetrics m = Metrics(p, c);
   EXPECT_NEAR(m.valid_pct, 100.0 * z.size() / total, 1e-9);
   std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
   EXPECT_NEAR(m.median_m, z[z.size() / 2], 0.0011);
@@ -117,7 +117,7 @@ TEST(StereoSim, BaseModelFollowsItsFormulas) {
   const double sigma = 0.05, p_hole = 0.25;
   const SimParams p = Base(sigma, p_hole, 10);
   for (double d : {4.0, 8.0, 12.0}) {
-    const camera::PanelMetrics m = Metrics(p, MakeCell(d, 0));
+    const records::PanelMetrics m = Metrics(p, MakeCell(d, 0));
     // Median at the true depth within one quantum; plane_std = Z²/(f·B)·√(σ² + step²/12).
     EXPECT_NEAR(m.median_m, d, QuantumM(d) + 0.001) << d;
     const double expected_std = d * d / kFB * std::sqrt(sigma * sigma + 1.0 / (12 * 32 * 32));
@@ -131,11 +131,11 @@ TEST(StereoSim, BaseModelFollowsItsFormulas) {
 
 TEST(StereoSim, RangeMeaningPutsOffAxisPanelsAtRangeCosAlpha) {
   SimParams p = Base(0.02, 0.1, 4);
-  const camera::PanelMetrics by_range = Metrics(p, MakeCell(12, 35));
+  const records::PanelMetrics by_range = Metrics(p, MakeCell(12, 35));
   EXPECT_NEAR(by_range.median_m, 12 * std::cos(35 * M_PI / 180), QuantumM(12) + 0.001);
   EXPECT_NEAR(by_range.azimuth_deg, 35.0, 0.5);
   p.protocol.distance_is = DistanceIs::kDepth;
-  const camera::PanelMetrics by_depth = Metrics(p, MakeCell(12, 35));
+  const records::PanelMetrics by_depth = Metrics(p, MakeCell(12, 35));
   EXPECT_NEAR(by_depth.median_m, 12.0, QuantumM(12) + 0.001);
 }
 
@@ -162,7 +162,7 @@ TEST(StereoSim, EmitterAndEdgesChangeHolesTheWayTheModelSays) {
     right = std::max(right, i % 1280);
   }
   std::vector<double> holes(9, 0.0), seen(9, 0.0);  // rows bottom−1 … bottom+7
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
   for (int k = 0; k < 10; ++k) {
     sim.Render(k, &frame);
     for (int r = 0; r < 9; ++r)
@@ -208,7 +208,7 @@ TEST(Effects, DepthScaleShiftsTheMedianBySZ) {
   const SimParams on = With(base, {{"depth_scale", {{"scale_rel", 0.02}}}});
   for (double d : {4.0, 12.0}) {
     const Cell c = MakeCell(d, 10);
-    const camera::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
+    const records::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
     EXPECT_NEAR(m1.median_m - m0.median_m, 0.02 * m0.median_m, 0.002) << d;
     // Scaled like the depths, up to the 1 mm rounding of the counts (levels 8.2 mm apart at
     // 4 m come out 8 or 9 mm apart: a few percent there).
@@ -232,7 +232,7 @@ TEST(Effects, RadialResidualBiasGrowsWithTanSquaredAlpha) {
   const SimParams on = With(base, {{"radial_disparity_residual", {{"k_px", k}}}});
   for (double a : {0.0, 20.0, 35.0}) {
     const Cell c = MakeCell(8, a);
-    const camera::PanelMetrics m0 = Metrics(base, c);
+    const records::PanelMetrics m0 = Metrics(base, c);
     const double shift = Metrics(on, c).median_m - m0.median_m;
     const double z = m0.median_m, t = std::tan(a * M_PI / 180);
     const double expected = -k * t * t * z * z / kFB;
@@ -246,7 +246,7 @@ TEST(Effects, EdgeMixingPullsTheMeanAndWorsensWithDistance) {
   double gap4 = 0, gap16 = 0;
   for (double d : {4.0, 16.0}) {
     const Cell c = MakeCell(d, 0);
-    const camera::PanelMetrics m0 = Metrics(base, c, 1), m1 = Metrics(on, c, 1);
+    const records::PanelMetrics m0 = Metrics(base, c, 1), m1 = Metrics(on, c, 1);
     EXPECT_NEAR(m1.median_m, m0.median_m, QuantumM(d) + 0.002) << d;  // median holds
     EXPECT_GT(m1.mean_m - m1.median_m, m0.mean_m - m0.median_m + 0.01 * d / 4) << d;
     EXPECT_GT(m1.plane_std_m, 1.5 * m0.plane_std_m) << d;
@@ -265,7 +265,7 @@ TEST(Effects, NoiseGainMultipliesPlaneStd) {
   const double expected = std::sqrt((4 * 0.08 * 0.08 + q2) / (0.08 * 0.08 + q2));
   for (double d : {4.0, 8.0}) {  // σ_Z below the panel's size: the plane fit stays well posed
     const Cell c = MakeCell(d, 10);
-    const camera::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
+    const records::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
     EXPECT_NEAR(m1.plane_std_m / m0.plane_std_m, expected, 0.05 * expected) << d;
     EXPECT_NEAR(m1.temporal_std_m / m0.temporal_std_m, expected, 0.1 * expected) << d;
     EXPECT_NEAR(m1.median_m, m0.median_m, QuantumM(d) + 0.002) << d;
@@ -287,7 +287,7 @@ TEST(Effects, PanelTiltTurnsTheFittedNormal) {
   for (double yaw : {15.0, 30.0}) {
     const SimParams on = With(base, {{"panel_tilt", {{"yaw_deg", yaw}}}});
     const Cell c = MakeCell(4, 0);
-    const camera::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
+    const records::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
     EXPECT_NEAR(m1.normal_tilt_deg, yaw, 1.0);
     // The far half covers fewer pixels: the median moves a little towards the near half.
     EXPECT_NEAR(m1.median_m, m0.median_m, 0.25 * std::sin(yaw * M_PI / 180));
@@ -301,7 +301,7 @@ TEST(Effects, TemporalDriftShiftsTheMedianByTheMeanOffset) {
   const SimParams on = With(base, {{"temporal_drift", {{"rate_px_per_s", rate}}}});
   const double d = 8;
   const Cell c = MakeCell(d, 0);
-  const camera::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
+  const records::PanelMetrics m0 = Metrics(base, c), m1 = Metrics(on, c);
   const double mean_offset = rate * 0.5 * 29.0 / 30.0;
   const double expected = -mean_offset * d * d / kFB;
   EXPECT_NEAR(m1.median_m - m0.median_m, expected, 0.15 * std::fabs(expected));
@@ -312,7 +312,7 @@ TEST(Effects, NoEffectsIsTheBaseModel) {
   const SimParams base = Base();
   const SimParams none = With(base, {});
   const Cell c = MakeCell(12, 10);
-  const camera::PanelMetrics a = Metrics(base, c), b = Metrics(none, c);
+  const records::PanelMetrics a = Metrics(base, c), b = Metrics(none, c);
   EXPECT_EQ(a.median_m, b.median_m);
   EXPECT_EQ(a.plane_std_m, b.plane_std_m);
 }

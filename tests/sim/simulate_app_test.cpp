@@ -183,7 +183,7 @@ TEST(SimulateApp, SensorFromRecordingTakesItsCamera) {
   for (double c : info.depth_intrinsics.coeffs) EXPECT_EQ(c, 0.0);
   EXPECT_NEAR(info.depth_units_m, 0.001, 1e-9);
   EXPECT_NEAR(info.options.at("Stereo_Baseline"), 95.07, 1e-3);
-  camera::DepthFrame frame;
+  records::DepthFrame frame;
   ASSERT_TRUE(reader.Next(&frame));
   EXPECT_EQ(frame.counts.size(), 64u * 48u);
 
@@ -251,14 +251,14 @@ TEST(SimulateApp, PanelExtractOnWrittenBagsAgreesWithMetricsOnlyOnEveryCell) {
                                   (run / "extract.csv").string() + " " + (run / "bags").string();
       ASSERT_EQ(RunCommand(extract, run), 0) << Read(run / "stderr.txt");
       const io::Manifest manifest = io::ReadManifest((run / "bags" / "manifest.csv").string());
-      std::map<std::string, camera::PanelMetrics> extracted;
+      std::map<std::string, records::PanelMetrics> extracted;
       for (const auto& r : io::ReadMetricsCsv((run / "extract.csv").string()))
         extracted[r.bag] = r;
       const auto simulated = io::ReadMetricsCsv((run / "sim.csv").string());
       ASSERT_EQ(simulated.size(), 32u);
       for (const auto& s : simulated) {
         ASSERT_TRUE(extracted.count(s.bag)) << s.bag;
-        const camera::PanelMetrics& e = extracted[s.bag];
+        const records::PanelMetrics& e = extracted[s.bag];
         ASSERT_TRUE(e.ok()) << s.bag << ": " << e.message;
         const double step_m = s.median_m * s.median_m / (640.0 * 0.095) / 32.0;
         EXPECT_NEAR(e.median_m, s.median_m, step_m + 0.001) << s.bag;
