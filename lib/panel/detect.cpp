@@ -44,7 +44,7 @@ class CountingRansac : public pcl::RandomSampleConsensus<pcl::PointXYZ> {
 
 struct RansacOut {
   bool ok = false;
-  Plane plane;
+  metrics::Plane plane;
   pcl::Indices inliers;
   int iterations = 0;
 };
@@ -114,7 +114,7 @@ void DepthAccumulator::Add(const records::DepthFrame& frame) {
   }
 }
 
-PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
+PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator& acc,
                            const PanelParams& p, const SearchWindow& window) {
   PanelDetection det;
   det.frames = acc.frames();
@@ -168,12 +168,12 @@ PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
     RansacOut g = RunRansac(model, p.ground_distance_m, p);
     det.ransac_iterations += g.iterations;
     if (g.ok && g.inliers.size() >= p.min_ground_fraction * pts.size()) {
-      Plane ground = g.plane;
+      metrics::Plane ground = g.plane;
       for (int it = 0; it < 2; ++it) {
-        PlaneMoments m;
+        metrics::PlaneMoments m;
         for (std::size_t k = 0; k < pts.size(); ++k)
           if (std::fabs(ground.Distance(pts[k].p)) < p.ground_distance_m) m.Add(pts[k].p);
-        const PlaneFit f = FitPlane(m);
+        const metrics::PlaneFit f = metrics::FitPlane(m);
         if (f.ok) ground = f.plane;
       }
       det.ground_found = true;
@@ -227,7 +227,7 @@ PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
 
   // 4. Planes in each cluster, scored as the panel.
   struct Found {
-    Plane plane;
+    metrics::Plane plane;
     std::vector<std::uint32_t> pixels;
   };
   std::vector<Found> found;
@@ -251,10 +251,10 @@ PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
       det.ransac_iterations += r.iterations;
       if (!r.ok || static_cast<int>(r.inliers.size()) < p.min_cluster_points) break;
       // Least-squares refinement on the inliers, then the inliers of the refined plane.
-      PlaneMoments m;
+      metrics::PlaneMoments m;
       for (int k : r.inliers) m.Add(pts[k].p);
-      const PlaneFit fit = FitPlane(m);
-      Plane plane = fit.ok ? fit.plane : r.plane;
+      const metrics::PlaneFit fit = metrics::FitPlane(m);
+      metrics::Plane plane = fit.ok ? fit.plane : r.plane;
       std::vector<std::uint32_t> pixels;
       pcl::Indices rest;
       for (int k : remaining) {
@@ -270,8 +270,8 @@ PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
       PanelCandidate cand;
       cand.cluster = static_cast<int>(c);
       cand.inliers = static_cast<int>(pixels.size());
-      PanelRectangle rect;
-      if (!RectangleFromPixels(rays, plane, up_hint, pixels, block, &rect)) {
+      metrics::PanelRectangle rect;
+      if (!metrics::RectangleFromPixels(rays, plane, up_hint, pixels, block, &rect)) {
         cand.rejected = "horizontal or degenerate plane";
         det.candidates.push_back(cand);
         found.push_back({plane, {}});
@@ -328,20 +328,20 @@ PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
 
   // 5. Refinement on every full-resolution pixel near the panel: inliers by depth residual
   //    against the plane (noise of the pixel's mean), plane refitted, rectangle re-measured.
-  PanelRectangle rect;
-  RectangleFromPixels(rays, found[best].plane, up_hint, found[best].pixels, block, &rect);
+  metrics::PanelRectangle rect;
+  metrics::RectangleFromPixels(rays, found[best].plane, up_hint, found[best].pixels, block, &rect);
   std::vector<std::uint32_t> inliers;
   double rms = 0;
   for (int it = 0; it < p.refine_iterations; ++it) {
-    const Eigen::Vector2d foot = PixelFootprint(rays, rect);
+    const Eigen::Vector2d foot = metrics::PixelFootprint(rays.intrinsics(), rect);
     const double grow = it == 0 ? 2.0 * block : 3.0;
     const double half_w = 0.5 * rect.width_m + grow * foot.x();
     const double half_h = 0.5 * rect.height_m + grow * foot.y();
-    PanelRectangle search = rect;
+    metrics::PanelRectangle search = rect;
     search.width_m = 2 * half_w;
     search.height_m = 2 * half_h;
-    const PanelRegion area = RegionFromRectangle(rays, search, 0.0);
-    PlaneMoments m;
+    const metrics::PanelRegion area = metrics::RegionFromRectangle(rays.intrinsics(), search, 0.0);
+    metrics::PlaneMoments m;
     inliers.clear();
     for (std::uint32_t i : area.pixels) {
       const std::uint32_t n = acc.Count(i);
@@ -357,11 +357,11 @@ PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
       inliers.push_back(i);
       m.Add(z * ray, n);  // a pixel's mean of n samples weighs n
     }
-    const PlaneFit fit = FitPlane(m);
+    const metrics::PlaneFit fit = metrics::FitPlane(m);
     if (!fit.ok) break;
     rms = fit.rms_m;
-    PanelRectangle next;
-    if (!RectangleFromPixels(rays, fit.plane, up_hint, inliers, 1.0, &next)) break;
+    metrics::PanelRectangle next;
+    if (!metrics::RectangleFromPixels(rays, fit.plane, up_hint, inliers, 1.0, &next)) break;
     rect = next;
   }
   det.inlier_pixels = static_cast<int>(inliers.size());

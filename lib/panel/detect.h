@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "records/depth_frame.h"
-#include "panel/geometry.h"
+#include "metrics/geometry.h"
 #include "panel/params.h"
 
 namespace depthbias::panel {
@@ -59,11 +59,11 @@ struct PanelCandidate {
 struct PanelDetection {
   bool found = false;
   std::string why_not;
-  PanelRectangle panel;        // refined on all inlier pixels
+  metrics::PanelRectangle panel;        // refined on all inlier pixels
   double plane_rms_m = 0.0;    // RMS orthogonal residual of the refined inliers
   int inlier_pixels = 0;       // full-resolution pixels supporting the refined plane
   bool ground_found = false;
-  Plane ground;
+  metrics::Plane ground;
   int ground_inliers = 0;
   int cloud_points = 0;        // detection cloud size (blocks with depth)
   int block_px = 0;
@@ -74,7 +74,7 @@ struct PanelDetection {
   int chosen = -1;             // index into candidates
 };
 
-PanelDetection DetectPanel(const RayTable& rays, const DepthAccumulator& acc,
+PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator& acc,
                            const PanelParams& params, const SearchWindow& window = {});
 
 }  // namespace depthbias::panel

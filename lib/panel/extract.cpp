@@ -26,14 +26,21 @@ bool FrameMatches(const records::DepthFrame& f, const camera::Intrinsics& in, st
 // Adds every remaining frame of source to measurer; false (why set) at a frame that does not
 // match the intrinsics.
 bool MeasureAll(FrameSource& source, const camera::Intrinsics& intrinsics,
-                records::DepthFrame* frame, RegionMeasurer* measurer, std::uint64_t* frames_read,
-                std::string* why) {
+                records::DepthFrame* frame, metrics::RegionMetrics* kernel,
+                std::uint64_t* frames_read, std::string* why) {
   while (source.Next(frame)) {
     ++*frames_read;
     if (!FrameMatches(*frame, intrinsics, why)) return false;
-    measurer->Add(*frame);
+    kernel->AddFrame(*frame);
   }
   return true;
+}
+
+metrics::KernelParams KernelParamsOf(const PanelParams& p) {
+  metrics::KernelParams k;
+  k.baseline_m = p.baseline_m;
+  k.region_margin_px = p.region_margin_px;
+  return k;
 }
 
 ExtractResult Fail(ExtractResult* r, const std::string& status, const std::string& message) {
@@ -59,38 +66,24 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     return Fail(&res, "error",
                 "depth stream has Modified Brown-Conrady distortion, which cannot be deprojected");
   }
-  const RayTable rays(intrinsics);
+  const metrics::RayTable rays(intrinsics);
   records::DepthFrame frame;
 
   // Box mode: the region is given, one pass measures it.
   if (box) {
     res.passes = 1;
-    res.region = RegionFromBox(intrinsics.width, intrinsics.height, box->u0, box->v0, box->u1,
+    res.region = metrics::RegionFromBox(intrinsics.width, intrinsics.height, box->u0, box->v0, box->u1,
                                box->v1);
     if (res.region.pixels.empty()) {
       return Fail(&res, "error", "the box lies outside the image");
     }
-    RegionMeasurer measurer(&rays, res.region, params.baseline_m);
-    if (!MeasureAll(source, intrinsics, &frame, &measurer, &res.frames_read, &why))
+    metrics::KernelParams kp = KernelParamsOf(params);
+    kp.region_margin_px = 0;  // the box's pixels are the region, no margin to add back
+    metrics::RegionMetrics kernel(intrinsics, res.region, kp);
+    if (!MeasureAll(source, intrinsics, &frame, &kernel, &res.frames_read, &why))
       return Fail(&res, "error", why);
-    // The box's centre ray gives a provisional direction; then the box's pixels on the fitted
-    // plane give the panel's centre and size.
-    records::PanelMetrics& m = res.metrics;
-    const Eigen::Vector2d c(0.5 * (box->u0 + box->u1 - 1), 0.5 * (box->v0 + box->v1 - 1));
-    const Eigen::Vector2d cr = camera::PixelToNormalized(intrinsics, c);
-    res.measure = measurer.Finish({cr.x(), cr.y(), 1.0}, &m);
-    if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not);
-    PanelRectangle rect;
-    const Plane& pl = res.measure.disparity_plane_ok ? res.measure.disparity_plane
-                                                      : res.measure.plane.plane;
-    if (RectangleFromPixels(rays, pl, {0, -1, 0}, res.region.pixels, 1.0, &rect)) {
-      const Eigen::Vector3d& center = rect.center_m;
-      m.azimuth_deg = std::atan2(center.x(), center.z()) * 180.0 / M_PI;
-      m.elevation_deg =
-          std::atan2(-center.y(), std::hypot(center.x(), center.z())) * 180.0 / M_PI;
-      m.panel_width_m = rect.width_m;
-      m.panel_height_m = rect.height_m;
-    }
+    res.measure = kernel.Finish({0, -1, 0}, &res.metrics);
+    if (!res.measure.success) return Fail(&res, "no_panel", res.measure.message);
     return res;
   }
 
@@ -110,7 +103,8 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   if (acc.frames() == 0) return Fail(&res, "error", "the recording holds no depth frame");
   res.detection = DetectPanel(rays, acc, params, window);
   if (!res.detection.found) return Fail(&res, "no_panel", res.detection.why_not);
-  res.region = RegionFromRectangle(rays, res.detection.panel, params.region_margin_px);
+  res.region =
+      metrics::RegionFromRectangle(intrinsics, res.detection.panel, params.region_margin_px);
   if (res.region.pixels.empty())
     return Fail(&res, "no_panel", "the panel's image region is empty after the margin");
 
@@ -118,14 +112,12 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   if (!source.Rewind())
     return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
   res.passes = 2;
-  RegionMeasurer measurer(&rays, res.region, params.baseline_m);
-  if (!MeasureAll(source, intrinsics, &frame, &measurer, &res.frames_read, &why))
+  metrics::RegionMetrics kernel(intrinsics, res.region, KernelParamsOf(params));
+  if (!MeasureAll(source, intrinsics, &frame, &kernel, &res.frames_read, &why))
     return Fail(&res, "error", why);
-  records::PanelMetrics& m = res.metrics;
-  res.measure = measurer.Finish(res.detection.panel.center_m, &m);
-  m.panel_width_m = res.detection.panel.width_m;
-  m.panel_height_m = res.detection.panel.height_m;
-  if (!res.measure.ok) return Fail(&res, "no_panel", res.measure.why_not);
+  const Eigen::Vector3d up = res.detection.panel.axis_up;
+  res.measure = kernel.Finish(up, &res.metrics);
+  if (!res.measure.success) return Fail(&res, "no_panel", res.measure.message);
   return res;
 }
 
@@ -175,7 +167,7 @@ std::string DetectionJson(const ExtractResult& r, const camera::Intrinsics& in,
     << ", \"frames_detection\": " << d.frames << ", \"frames_measured\": " << r.measure.frames
     << ", \"frames_with_depth\": " << r.measure.frames_with_depth;
   if (d.found) {
-    const PanelRectangle& p = d.panel;
+    const metrics::PanelRectangle& p = d.panel;
     j << ", \"plane\": {\"normal\": " << Vec(p.plane.normal)
       << ", \"offset_m\": " << Num(p.plane.offset_m) << ", \"rms_m\": " << Num(d.plane_rms_m)
       << "}, \"center_m\": " << Vec(p.center_m) << ", \"width_m\": " << Num(p.width_m)

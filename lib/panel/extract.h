@@ -11,8 +11,8 @@
 #include "camera/intrinsics.h"
 #include "records/panel_metrics.h"
 #include "panel/detect.h"
-#include "panel/geometry.h"
-#include "panel/measure.h"
+#include "metrics/geometry.h"
+#include "metrics/region_metrics.h"
 #include "panel/params.h"
 
 namespace depthbias::panel {
@@ -27,8 +27,8 @@ struct PixelBox {
 struct ExtractResult {
   records::PanelMetrics metrics;  // status "ok", "no_panel" or "error", with message
   PanelDetection detection;      // automatic mode only
-  PanelRegion region;
-  MeasureResult measure;
+  metrics::PanelRegion region;
+  metrics::KernelResult measure;
   std::uint64_t frames_read = 0; // frames read, over every pass
   int passes = 0;
 };

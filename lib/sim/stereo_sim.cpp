@@ -456,43 +456,37 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
     run(std::false_type{});
 }
 
-PixelList StereoSim::RegionPixels(double margin_px) const {
-  const auto& in = params_.sensor.intrinsics;
-  const PanelPose& panel = truth_.panel;
-  // Panel coordinates (along width, along height) where the ray (xn, yn, 1) meets its plane.
-  auto on_plane = [&](double xn, double yn, Eigen::Vector2d* st) {
-    const Eigen::Vector3d ray(xn, yn, 1.0);
-    const double denom = panel.normal.dot(ray);
-    if (std::fabs(denom) < 1e-12) return false;
-    const double t = panel.normal.dot(panel.center_m) / denom;
-    if (!(t > 0)) return false;
-    const Eigen::Vector3d q = t * ray - panel.center_m;
-    *st = Eigen::Vector2d(q.dot(panel.axis_width), q.dot(panel.axis_height));
-    return true;
-  };
-  // One pixel's footprint on the panel at its centre: |∂(s,t)/∂u| + |∂(s,t)/∂v|.
-  const double cu = in.ppx + in.fx * panel.center_m.x() / panel.center_m.z();
-  const double cv = in.ppy + in.fy * panel.center_m.y() / panel.center_m.z();
-  auto at = [&](double du, double dv) {
-    Eigen::Vector2d st(0, 0);
-    on_plane((cu + du - in.ppx) / in.fx, (cv + dv - in.ppy) / in.fy, &st);
-    return st;
-  };
-  const Eigen::Vector2d du = at(0.5, 0) - at(-0.5, 0), dv = at(0, 0.5) - at(0, -0.5);
-  const double half_w = 0.5 * panel.width_m - margin_px * (std::fabs(du.x()) + std::fabs(dv.x()));
-  const double half_h = 0.5 * panel.height_m - margin_px * (std::fabs(du.y()) + std::fabs(dv.y()));
+metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose) {
+  metrics::PanelRectangle rect;
+  rect.plane.normal = pose.normal.normalized();
+  rect.plane.offset_m = -rect.plane.normal.dot(pose.center_m);
+  rect.center_m = pose.center_m;
+  rect.axis_width = pose.axis_width;
+  rect.axis_up = -pose.axis_height;
+  rect.width_m = pose.width_m;
+  rect.height_m = pose.height_m;
+  return rect;
+}
+
+PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out) const {
+  metrics::PanelRegion region = metrics::RegionFromRectangle(
+      params_.sensor.intrinsics, PanelRectangleOf(truth_.panel), margin_px);
+  const int width = params_.sensor.intrinsics.width;
   PixelList pixels;
-  if (half_w <= 0 || half_h <= 0) return pixels;
-  for (int v = 0; v < window_.height; ++v) {
-    const double yn = (window_.v0 + v - in.ppy) / in.fy;
-    for (int u = 0; u < window_.width; ++u) {
-      Eigen::Vector2d st;
-      if (!on_plane((window_.u0 + u - in.ppx) / in.fx, yn, &st)) continue;
-      if (std::fabs(st.x()) > half_w || std::fabs(st.y()) > half_h) continue;
-      const int i = v * window_.width + u;
-      pixels.window.push_back(i);
-      pixels.image.push_back(Counter(0, i));
-    }
+  std::vector<std::uint32_t> kept;
+  kept.reserve(region.pixels.size());
+  for (std::uint32_t i : region.pixels) {
+    const int u = static_cast<int>(i % width) - window_.u0;
+    const int v = static_cast<int>(i / width) - window_.v0;
+    if (u < 0 || v < 0 || u >= window_.width || v >= window_.height) continue;
+    const int w = v * window_.width + u;
+    pixels.window.push_back(w);
+    pixels.image.push_back(Counter(0, w));
+    kept.push_back(i);
+  }
+  if (region_out) {
+    region.pixels.swap(kept);
+    *region_out = std::move(region);
   }
   return pixels;
 }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "metrics/geometry.h"
 #include "records/depth_frame.h"
 #include "records/panel_metrics.h"
 #include "sim/effects.h"
@@ -75,9 +76,10 @@ class StereoSim {
 
   // Window pixels that see the panel, and that still do after eroding it by margin_px.
   PixelList PanelPixels(int margin_px) const;
-  // The panel's image region as panel_extract draws it: pixels whose centre ray meets the panel
-  // rectangle shrunk on every side by margin_px pixel footprints (at the panel's centre).
-  PixelList RegionPixels(double margin_px) const;
+  // The panel's image region, drawn by the one definition panel_extract uses
+  // (metrics::RegionFromRectangle on the true panel rectangle), limited to the window; the
+  // region itself in *region when given.
+  PixelList RegionPixels(double margin_px, metrics::PanelRegion* region = nullptr) const;
   // True depth Z of a window pixel (0 where nothing is hit).
   double TrueDepth(int pixel) const { return true_depth_m_[pixel]; }
 
@@ -129,6 +131,9 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
 std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
                                                     const std::vector<Cell>& cells,
                                                     const MetricsParams& metrics = {});
+
+// The true panel of a recording as a rectangle on its plane (normal toward the camera).
+metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose);
 
 // Every recording of the protocol, in MakeCells' order.
 std::vector<CellMetricsResult> SimulateProtocolMetrics(const SimParams& params,

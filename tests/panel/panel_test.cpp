@@ -33,7 +33,7 @@ class VectorSource : public FrameSource {
   int k_ = 0;
 };
 
-double IoU(const PanelRegion& region, const std::vector<char>& footprint) {
+double IoU(const metrics::PanelRegion& region, const std::vector<char>& footprint) {
   std::vector<char> mask(footprint.size(), 0);
   for (std::uint32_t i : region.pixels) mask[i] = 1;
   std::size_t inter = 0, uni = 0;
@@ -61,13 +61,13 @@ TEST(PanelParams, DefaultsAreValidAndBadValuesAreRefused) {
 }
 
 TEST(PanelGeometry, PlaneFitRecoversKnownPlane) {
-  PlaneMoments m;
+  metrics::PlaneMoments m;
   const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.2, -1).normalized();
   const Eigen::Vector3d c(0.5, 0.2, 6.0);
   const Eigen::Vector3d a = n.unitOrthogonal(), b = n.cross(a);
   for (int i = -5; i <= 5; ++i)
     for (int j = -5; j <= 5; ++j) m.Add(c + 0.1 * i * a + 0.1 * j * b + ((i + j) % 2 ? 0.01 : -0.01) * n);
-  const PlaneFit f = FitPlane(m);
+  const metrics::PlaneFit f = metrics::FitPlane(m);
   ASSERT_TRUE(f.ok);
   EXPECT_NEAR(std::fabs(f.plane.normal.dot(n)), 1.0, 1e-9);
   EXPECT_GT(f.plane.normal.dot(-c), 0);
@@ -182,7 +182,7 @@ TEST(PanelExtractBox, BoxInsideThePanelAgreesWithAutomatic) {
   VectorSource a(&scene), b(&scene);
   const ExtractResult ra = ExtractPanel(a, scene.in, PanelParams{});
   ASSERT_EQ(ra.metrics.status, "ok");
-  const PanelRegion& reg = ra.region;
+  const metrics::PanelRegion& reg = ra.region;
   const PixelBox box{reg.u_min + 3.0, reg.v_min + 3.0, reg.u_max - 2.0, reg.v_max - 2.0};
   const ExtractResult rb = ExtractPanel(b, scene.in, PanelParams{}, {}, box);
   ASSERT_EQ(rb.metrics.status, "ok") << rb.metrics.message;

@@ -1,4 +1,4 @@
-#include "panel/geometry.h"
+#include "metrics/geometry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 
-namespace depthbias::panel {
+namespace depthbias::metrics {
 
 RayTable::RayTable(const camera::Intrinsics& intrinsics) : intrinsics_(intrinsics) {
   const std::size_t n = static_cast<std::size_t>(intrinsics.width) * intrinsics.height;
@@ -72,8 +72,7 @@ bool PanelRectangle::PlaneCoordinates(const Eigen::Vector3d& ray, Eigen::Vector2
   return true;
 }
 
-Eigen::Vector2d PixelFootprint(const RayTable& rays, const PanelRectangle& rect) {
-  const camera::Intrinsics& in = rays.intrinsics();
+Eigen::Vector2d PixelFootprint(const camera::Intrinsics& in, const PanelRectangle& rect) {
   const Eigen::Vector2d c = camera::Project(in, rect.center_m);
   auto at = [&](double du, double dv) {
     const Eigen::Vector2d r = camera::PixelToNormalized(in, {c.x() + du, c.y() + dv});
@@ -130,13 +129,12 @@ void FinishRegion(PanelRegion* r) {
 
 }  // namespace
 
-PanelRegion RegionFromRectangle(const RayTable& rays, const PanelRectangle& rect,
+PanelRegion RegionFromRectangle(const camera::Intrinsics& in, const PanelRectangle& rect,
                                 double margin_px) {
   PanelRegion region;
-  region.width = rays.width();
-  region.height = rays.height();
-  const camera::Intrinsics& in = rays.intrinsics();
-  const Eigen::Vector2d foot = PixelFootprint(rays, rect);
+  region.width = in.width;
+  region.height = in.height;
+  const Eigen::Vector2d foot = PixelFootprint(in, rect);
   const double half_w = 0.5 * rect.width_m - margin_px * foot.x();
   const double half_h = 0.5 * rect.height_m - margin_px * foot.y();
   double umin = in.width, umax = -1, vmin = in.height, vmax = -1;
@@ -158,7 +156,8 @@ PanelRegion RegionFromRectangle(const RayTable& rays, const PanelRectangle& rect
   for (int v = v0; v <= v1; ++v) {
     for (int u = u0; u <= u1; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * in.width + u;
-      if (!rect.PlaneCoordinates(rays.Ray(i), &st)) continue;
+      const Eigen::Vector2d r = camera::PixelToNormalized(in, {u, v});
+      if (!rect.PlaneCoordinates({r.x(), r.y(), 1.0}, &st)) continue;
       if (std::fabs(st.x()) <= half_w && std::fabs(st.y()) <= half_h)
         region.pixels.push_back(static_cast<std::uint32_t>(i));
     }
@@ -186,29 +185,38 @@ PanelRegion RegionFromBox(int width, int height, double u0, double v0, double u1
 bool RectangleFromPixels(const RayTable& rays, const Plane& plane, const Eigen::Vector3d& up_hint,
                          const std::vector<std::uint32_t>& pixels, double footprint_px,
                          PanelRectangle* rect) {
-  if (pixels.size() < 3) return false;
+  std::vector<Eigen::Vector3d> ray_list;
+  ray_list.reserve(pixels.size());
+  for (std::uint32_t i : pixels) ray_list.push_back(rays.Ray(i));
+  return RectangleFromRays(rays.intrinsics(), plane, up_hint, ray_list, footprint_px, rect);
+}
+
+bool RectangleFromRays(const camera::Intrinsics& intrinsics, const Plane& plane,
+                       const Eigen::Vector3d& up_hint, const std::vector<Eigen::Vector3d>& rays,
+                       double footprint_px, PanelRectangle* rect) {
+  if (rays.size() < 3) return false;
   PanelRectangle r;
   r.plane = plane;
   if (!PanelAxes(plane, up_hint, &r.axis_width, &r.axis_up)) return false;
   // Provisional centre: the plane point on the mean ray.
   Eigen::Vector3d mean_ray = Eigen::Vector3d::Zero();
-  for (std::uint32_t i : pixels) mean_ray += rays.Ray(i);
-  mean_ray /= static_cast<double>(pixels.size());
+  for (const Eigen::Vector3d& ray : rays) mean_ray += ray;
+  mean_ray /= static_cast<double>(rays.size());
   const double zc = plane.DepthOnRay(mean_ray);
   if (!std::isfinite(zc)) return false;
   r.center_m = zc * mean_ray;
   std::vector<double> s, t;
-  s.reserve(pixels.size());
-  t.reserve(pixels.size());
+  s.reserve(rays.size());
+  t.reserve(rays.size());
   Eigen::Vector2d st;
-  for (std::uint32_t i : pixels) {
-    if (!r.PlaneCoordinates(rays.Ray(i), &st)) continue;
+  for (const Eigen::Vector3d& ray : rays) {
+    if (!r.PlaneCoordinates(ray, &st)) continue;
     s.push_back(st.x());
     t.push_back(st.y());
   }
   if (s.size() < 3) return false;
   r.width_m = r.height_m = 1.0;  // any size: only the footprint near the centre is needed
-  const Eigen::Vector2d foot = PixelFootprint(rays, r) * footprint_px;
+  const Eigen::Vector2d foot = PixelFootprint(intrinsics, r) * footprint_px;
   double s0, s1, t0, t1;
   RobustExtent(s, 3.0 * foot.x(), &s0, &s1);
   RobustExtent(t, 3.0 * foot.y(), &t0, &t1);
@@ -219,5 +227,4 @@ bool RectangleFromPixels(const RayTable& rays, const Plane& plane, const Eigen::
   return true;
 }
 
-
-}  // namespace depthbias::panel
+}  // namespace depthbias::metrics

@@ -1,7 +1,7 @@
 #pragma once
-// Geometry shared by detection and measurement: per-pixel rays (deprojection done once per
-// recording), planes and their least-squares fit from moments, the panel rectangle, and the
-// panel's image region.
+// Geometry shared by panel detection, the metrics kernel and the simulator: per-pixel rays
+// (deprojection done once per recording), planes and their least-squares fit from moments, the
+// panel rectangle, and the one definition of the panel's image region.
 
 #include <array>
 #include <cstdint>
@@ -9,9 +9,10 @@
 
 #include <Eigen/Core>
 
+
 #include "camera/intrinsics.h"
 
-namespace depthbias::panel {
+namespace depthbias::metrics {
 
 // Ray of every pixel at Z = 1: point_m = depth_m · ray(u, v) (camera::Deproject semantics).
 class RayTable {
@@ -86,8 +87,10 @@ struct PanelRegion {
   std::size_t size() const { return pixels.size(); }
 };
 
-// Pixels whose centre ray meets the rectangle shrunk by margin_px pixel footprints per side.
-PanelRegion RegionFromRectangle(const RayTable& rays, const PanelRectangle& rect,
+// The panel's image region, one definition for panel_extract and the simulator: pixels whose
+// centre ray (deprojected with the intrinsics, in double precision) meets the rectangle shrunk by
+// margin_px pixel footprints per side (footprint at the rectangle's centre).
+PanelRegion RegionFromRectangle(const camera::Intrinsics& intrinsics, const PanelRectangle& rect,
                                 double margin_px);
 // Pixels of an image-aligned box [u0, u1) × [v0, v1), clipped to the image.
 PanelRegion RegionFromBox(int width, int height, double u0, double v0, double u1, double v1);
@@ -99,8 +102,12 @@ PanelRegion RegionFromBox(int width, int height, double u0, double v0, double u1
 bool RectangleFromPixels(const RayTable& rays, const Plane& plane, const Eigen::Vector3d& up_hint,
                          const std::vector<std::uint32_t>& pixels, double footprint_px,
                          PanelRectangle* rect);
+// The same from the pixels' rays (x/z, y/z, 1).
+bool RectangleFromRays(const camera::Intrinsics& intrinsics, const Plane& plane,
+                       const Eigen::Vector3d& up_hint, const std::vector<Eigen::Vector3d>& rays,
+                       double footprint_px, PanelRectangle* rect);
 
 // Footprint of one pixel on the rectangle's plane near its centre, along width and up [m].
-Eigen::Vector2d PixelFootprint(const RayTable& rays, const PanelRectangle& rect);
+Eigen::Vector2d PixelFootprint(const camera::Intrinsics& intrinsics, const PanelRectangle& rect);
 
-}  // namespace depthbias::panel
+}  // namespace depthbias::metrics
