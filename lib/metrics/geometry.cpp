@@ -101,18 +101,6 @@ void RobustExtent(std::vector<double> v, double max_gap, double* lo, double* hi)
   *hi = v[b];
 }
 
-// In-plane axes of a panel plane: up is the ground's up direction (or the camera's) projected
-// onto the plane, width = up × normal (to the image's right for a panel facing the camera).
-bool PanelAxes(const Plane& plane, const Eigen::Vector3d& up_hint, Eigen::Vector3d* axis_w,
-               Eigen::Vector3d* axis_up) {
-  Eigen::Vector3d up = up_hint - up_hint.dot(plane.normal) * plane.normal;
-  if (up.norm() < 0.3) return false;  // plane close to horizontal: not a standing panel
-  up.normalize();
-  *axis_up = up;
-  *axis_w = up.cross(plane.normal).normalized();
-  return true;
-}
-
 void FinishRegion(PanelRegion* r) {
   std::sort(r->pixels.begin(), r->pixels.end());
   if (r->pixels.empty()) return;
@@ -128,6 +116,18 @@ void FinishRegion(PanelRegion* r) {
 }
 
 }  // namespace
+
+// In-plane axes of a panel plane: up is the ground's up direction (or the camera's) projected
+// onto the plane, width = up × normal (to the image's right for a panel facing the camera).
+bool PanelAxes(const Plane& plane, const Eigen::Vector3d& up_hint, Eigen::Vector3d* axis_w,
+               Eigen::Vector3d* axis_up) {
+  Eigen::Vector3d up = up_hint - up_hint.dot(plane.normal) * plane.normal;
+  if (up.norm() < 0.3) return false;  // plane close to horizontal: not a standing panel
+  up.normalize();
+  *axis_up = up;
+  *axis_w = up.cross(plane.normal).normalized();
+  return true;
+}
 
 PanelRegion RegionFromRectangle(const camera::Intrinsics& in, const PanelRectangle& rect,
                                 double margin_px) {

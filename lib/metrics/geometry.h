@@ -107,6 +107,12 @@ bool RectangleFromRays(const camera::Intrinsics& intrinsics, const Plane& plane,
                        const Eigen::Vector3d& up_hint, const std::vector<Eigen::Vector3d>& rays,
                        double footprint_px, PanelRectangle* rect);
 
+// In-plane axes of a standing panel: up is up_hint (the ground's or the camera's up) projected
+// onto the plane, width = up × normal (to the image's right for a panel facing the camera).
+// False for a plane close to horizontal.
+bool PanelAxes(const Plane& plane, const Eigen::Vector3d& up_hint, Eigen::Vector3d* axis_width,
+               Eigen::Vector3d* axis_up);
+
 // Footprint of one pixel on the rectangle's plane near its centre, along width and up [m].
 Eigen::Vector2d PixelFootprint(const camera::Intrinsics& intrinsics, const PanelRectangle& rect);
 

@@ -1,8 +1,12 @@
 #include "panel/detect.h"
 
+#include "panel/panel_fit.h"
+
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numeric>
+#include <sstream>
 
 // PCL's templates are instantiated here from its headers, so that only libpcl_common is linked:
 // loading libpcl_segmentation and the libraries it drags in (features, filters, ...) costs
@@ -77,6 +81,13 @@ RansacOut RunRansac(const pcl::SampleConsensusModel<pcl::PointXYZ>::Ptr& model,
 // Depth noise of one sample at depth Z: σ_Z = Z²·σ_d / (f·B).
 double DepthSigma(double depth_m, double focal_px, const PanelParams& p) {
   return depth_m * depth_m * p.expected_subpixel_rms_px / (focal_px * p.baseline_m);
+}
+
+// A number as a person reads it: 3 significant digits, no trailing zeros ("1 x 1.2 m").
+std::string Text(double v) {
+  std::ostringstream s;
+  s << std::setprecision(3) << v;
+  return s.str();
 }
 
 // One point of the detection cloud: the best-observed pixel of a block.
@@ -225,13 +236,15 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
     return det;
   }
 
-  // 4. Planes in each cluster, scored as the panel.
+  // 4. Planes in each cluster; on each, the panel's known size fitted where the evidence says a
+  //    solid, free-standing panel stands (panel_fit.h), and scored as the panel.
   struct Found {
-    metrics::Plane plane;
-    std::vector<std::uint32_t> pixels;
+    WindowFit fit;
+    double plane_rms_m = 0;
   };
   std::vector<Found> found;
   const double nominal_w = p.panel_width_m, nominal_h = p.panel_height_m;
+  const metrics::Plane* ground = det.ground_found ? &det.ground : nullptr;
   for (std::size_t c = 0; c < clusters.size() && static_cast<int>(c) < p.max_clusters; ++c) {
     pcl::Indices remaining;
     std::vector<double> depths;
@@ -253,48 +266,64 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
       // Least-squares refinement on the inliers, then the inliers of the refined plane.
       metrics::PlaneMoments m;
       for (int k : r.inliers) m.Add(pts[k].p);
-      const metrics::PlaneFit fit = metrics::FitPlane(m);
-      metrics::Plane plane = fit.ok ? fit.plane : r.plane;
-      std::vector<std::uint32_t> pixels;
+      const metrics::PlaneFit lsq = metrics::FitPlane(m);
+      const metrics::Plane plane = lsq.ok ? lsq.plane : r.plane;
+      Eigen::Vector3d seed = Eigen::Vector3d::Zero();
+      int inliers = 0;
       pcl::Indices rest;
       for (int k : remaining) {
         if (std::fabs(plane.Distance(pts[k].p)) < thr) {
-          pixels.push_back(pts[k].pixel);
+          seed += pts[k].p;
+          ++inliers;
         } else {
           rest.push_back(k);
         }
       }
-      if (static_cast<int>(pixels.size()) < p.min_cluster_points) break;
+      if (inliers < p.min_cluster_points) break;
       remaining.swap(rest);
+      seed /= inliers;
 
       PanelCandidate cand;
       cand.cluster = static_cast<int>(c);
-      cand.inliers = static_cast<int>(pixels.size());
-      metrics::PanelRectangle rect;
-      if (!metrics::RectangleFromPixels(rays, plane, up_hint, pixels, block, &rect)) {
-        cand.rejected = "horizontal or degenerate plane";
+      cand.inliers = inliers;
+      Found f;
+      f.fit = FitAndRefinePanel(rays, acc, plane, up_hint, ground, seed, p, &f.plane_rms_m);
+      if (!f.fit.success) {
+        cand.rejected = f.fit.message;
         det.candidates.push_back(cand);
-        found.push_back({plane, {}});
+        found.push_back(std::move(f));
         continue;
       }
-      cand.width_m = rect.width_m;
-      cand.height_m = rect.height_m;
+      const metrics::PanelRectangle& rect = f.fit.rect;
+      const WindowEvidence& ev = f.fit.evidence;
+      cand.width_m = ev.covered_width_m;
+      cand.height_m = ev.covered_height_m;
       cand.range_m = rect.center_m.norm();
       cand.off_axis_deg = std::acos(rect.center_m.z() / cand.range_m) * kRadToDeg;
       cand.facing_deg =
-          std::acos(std::min(1.0, plane.normal.dot(-rect.center_m) / cand.range_m)) * kRadToDeg;
-      const double tol = p.size_tolerance;
-      if (std::fabs(rect.width_m / nominal_w - 1) > tol ||
-          std::fabs(rect.height_m / nominal_h - 1) > tol) {
-        cand.rejected = "size " + std::to_string(rect.width_m) + " x " +
-                        std::to_string(rect.height_m) + " m";
+          std::acos(std::min(1.0, rect.plane.normal.dot(-rect.center_m) / cand.range_m)) *
+          kRadToDeg;
+      cand.evidence = ev;
+      cand.see_through = ev.SeeThrough();
+      cand.ring_share = ev.RingShare();
+      const double coverage = std::min(cand.width_m / nominal_w, cand.height_m / nominal_h);
+      if (coverage < p.min_coverage) {
+        cand.rejected = "its pixels cover only " + Text(cand.width_m) + " x " +
+                        Text(cand.height_m) + " m of the panel's size";
+      } else if (cand.see_through > p.max_see_through) {
+        cand.rejected = "the background shows through " + Text(100 * cand.see_through) +
+                        " % of it: not a solid panel";
+      } else if (cand.ring_share > p.max_ring_share) {
+        cand.rejected = "the plane continues around it (" + Text(100 * cand.ring_share) +
+                        " %): part of a larger surface";
       } else if (cand.facing_deg > p.max_facing_angle_deg) {
         cand.rejected = "does not face the camera";
       }
-      cand.cost = std::fabs(std::log(rect.width_m / nominal_w)) +
-                  std::fabs(std::log(rect.height_m / nominal_h)) +
+      const double rms_thr = p.plane_sigma_k * DepthSigma(cand.range_m, focal_px, p) +
+                             p.plane_distance_m;
+      cand.cost = 2.0 * cand.see_through + cand.ring_share + 0.5 * (1.0 - std::min(1.0, coverage)) +
                   0.2 * cand.facing_deg / p.max_facing_angle_deg +
-                  0.2 * fit.rms_m / thr;
+                  0.2 * std::min(1.0, f.plane_rms_m / rms_thr);
       if (p.use_search_window && window.known()) {
         if (std::isfinite(window.distance_m)) {
           const double dd = std::fabs(cand.range_m - window.distance_m);
@@ -310,7 +339,7 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
         }
       }
       det.candidates.push_back(cand);
-      found.push_back({plane, std::move(pixels)});
+      found.push_back(std::move(f));
     }
   }
   int best = -1;
@@ -319,61 +348,17 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
     if (best < 0 || det.candidates[k].cost < det.candidates[best].cost) best = static_cast<int>(k);
   }
   if (best < 0) {
-    det.why_not = "no plane of " + std::to_string(nominal_w) + " x " + std::to_string(nominal_h) +
-                  " m facing the camera among " + std::to_string(det.candidates.size()) +
-                  " planes in " + std::to_string(clusters.size()) + " clusters";
+    det.why_not = "no solid, free-standing plane of " + Text(nominal_w) + " x " +
+                  Text(nominal_h) + " m facing the camera among " +
+                  std::to_string(det.candidates.size()) + " planes in " +
+                  std::to_string(clusters.size()) + " clusters";
     return det;
   }
   det.chosen = best;
-
-  // 5. Refinement on every full-resolution pixel near the panel: inliers by depth residual
-  //    against the plane (noise of the pixel's mean), plane refitted, rectangle re-measured.
-  metrics::PanelRectangle rect;
-  metrics::RectangleFromPixels(rays, found[best].plane, up_hint, found[best].pixels, block, &rect);
-  std::vector<std::uint32_t> inliers;
-  double rms = 0;
-  for (int it = 0; it < p.refine_iterations; ++it) {
-    const Eigen::Vector2d foot = metrics::PixelFootprint(rays.intrinsics(), rect);
-    const double grow = it == 0 ? 2.0 * block : 3.0;
-    const double half_w = 0.5 * rect.width_m + grow * foot.x();
-    const double half_h = 0.5 * rect.height_m + grow * foot.y();
-    metrics::PanelRectangle search = rect;
-    search.width_m = 2 * half_w;
-    search.height_m = 2 * half_h;
-    const metrics::PanelRegion area = metrics::RegionFromRectangle(rays.intrinsics(), search, 0.0);
-    metrics::PlaneMoments m;
-    inliers.clear();
-    for (std::uint32_t i : area.pixels) {
-      const std::uint32_t n = acc.Count(i);
-      if (n == 0) continue;
-      const Eigen::Vector3d ray = rays.Ray(i);
-      const double z = acc.MeanDepth(i);
-      const double zp = rect.plane.DepthOnRay(ray);
-      if (!std::isfinite(zp)) continue;
-      const double lim = p.plane_sigma_k * DepthSigma(zp, focal_px, p) / std::sqrt(n) +
-                         p.plane_distance_m;
-      if (std::fabs(z - zp) > lim) continue;
-      if (det.ground_found && det.ground.Distance(z * ray) < p.ground_distance_m) continue;
-      inliers.push_back(i);
-      m.Add(z * ray, n);  // a pixel's mean of n samples weighs n
-    }
-    const metrics::PlaneFit fit = metrics::FitPlane(m);
-    if (!fit.ok) break;
-    rms = fit.rms_m;
-    metrics::PanelRectangle next;
-    if (!metrics::RectangleFromPixels(rays, fit.plane, up_hint, inliers, 1.0, &next)) break;
-    rect = next;
-  }
-  det.inlier_pixels = static_cast<int>(inliers.size());
-  det.plane_rms_m = rms;
-  det.panel = rect;
-  const double tol = p.size_tolerance;
-  if (std::fabs(rect.width_m / nominal_w - 1) > tol ||
-      std::fabs(rect.height_m / nominal_h - 1) > tol) {
-    det.why_not = "refined panel measures " + std::to_string(rect.width_m) + " x " +
-                  std::to_string(rect.height_m) + " m";
-    return det;
-  }
+  det.panel = found[best].fit.rect;
+  det.evidence = found[best].fit.evidence;
+  det.inlier_pixels = static_cast<int>(found[best].fit.on_plane_pixels.size());
+  det.plane_rms_m = found[best].plane_rms_m;
   det.found = true;
   return det;
 }

@@ -47,11 +47,40 @@ struct SearchWindow {
   bool known() const { return std::isfinite(distance_m) || std::isfinite(angle_deg); }
 };
 
+// What the accumulated frames show in and around a panel-sized window on a candidate plane
+// (panel/panel_fit.h): observed pixels by class, counted over the window, a ring around it, and
+// the plane beyond it.
+struct WindowEvidence {
+  int on_plane = 0;       // observed pixels on the plane inside the window
+  int behind = 0;         // observed pixels behind the plane inside the window
+  int ground = 0;         // observed ground pixels inside the window
+  int in_front = 0;       // observed pixels in front of the plane inside the window
+  int ring_on_plane = 0;  // observed pixels on the plane in a ring around the window
+  int ring_observed = 0;  // observed pixels (any class) in that ring
+  int cut_off_px = 0;     // on-plane pixels of the searched area outside the window
+  double cut_off_below_m = 0, cut_off_above_m = 0;  // how far they reach beyond its edges
+  double cut_off_left_m = 0, cut_off_right_m = 0;
+  double covered_width_m = 0, covered_height_m = 0;  // extent of the on-plane pixels inside
+
+  // Share of the window's observed pixels that show something else than a solid panel.
+  double SeeThrough() const {
+    const int all = on_plane + behind + ground;
+    return all > 0 ? static_cast<double>(behind + ground) / all : 1.0;
+  }
+  double RingShare() const {
+    return ring_observed > 0 ? static_cast<double>(ring_on_plane) / ring_observed : 0.0;
+  }
+};
+
 // One plane found in a cluster and how it scored.
 struct PanelCandidate {
   int cluster = -1;
   int inliers = 0;       // cloud points (blocks)
-  double width_m = 0, height_m = 0, range_m = 0, off_axis_deg = 0, facing_deg = 0;
+  double width_m = 0, height_m = 0;  // extent of the plane's pixels inside the fitted window
+  double range_m = 0, off_axis_deg = 0, facing_deg = 0;
+  double see_through = 0;  // WindowEvidence::SeeThrough
+  double ring_share = 0;   // WindowEvidence::RingShare
+  WindowEvidence evidence;  // of its fitted window
   double cost = 0;       // lower is better
   std::string rejected;  // empty when acceptable
 };
@@ -59,9 +88,10 @@ struct PanelCandidate {
 struct PanelDetection {
   bool found = false;
   std::string why_not;
-  metrics::PanelRectangle panel;        // refined on all inlier pixels
+  metrics::PanelRectangle panel;        // the known size, fitted and refined on the plane
   double plane_rms_m = 0.0;    // RMS orthogonal residual of the refined inliers
   int inlier_pixels = 0;       // full-resolution pixels supporting the refined plane
+  WindowEvidence evidence;     // of the chosen window (cut-off parts of the plane included)
   bool ground_found = false;
   metrics::Plane ground;
   int ground_inliers = 0;

@@ -1,6 +1,10 @@
 #include "panel/extract.h"
 
+#include "panel/panel_fit.h"
+
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <iomanip>
 #include <sstream>
 #include <utility>
@@ -107,6 +111,23 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
       metrics::RegionFromRectangle(intrinsics, res.detection.panel, params.region_margin_px);
   if (res.region.pixels.empty())
     return Fail(&res, "no_panel", "the panel's image region is empty after the margin");
+  // A pixel counts as the panel's only where the panel covers it: pixels of the rectangle in
+  // which the pooled frames show the background, the ground or an occluder are left out.
+  {
+    const std::vector<std::uint32_t> out = PixelsNotOnPanel(
+        rays, acc, res.region, res.detection.panel.plane,
+        res.detection.ground_found ? &res.detection.ground : nullptr, params);
+    res.excluded_pixels = static_cast<int>(out.size());
+    if (!out.empty()) {
+      std::vector<std::uint32_t> kept;
+      kept.reserve(res.region.pixels.size() - out.size());
+      std::set_difference(res.region.pixels.begin(), res.region.pixels.end(), out.begin(),
+                          out.end(), std::back_inserter(kept));
+      res.region.pixels.swap(kept);
+    }
+  }
+  if (res.region.pixels.empty())
+    return Fail(&res, "no_panel", "no pixel of the panel's region shows the panel");
 
   // Pass 2: measure the region over every frame.
   if (!source.Rewind())
@@ -128,6 +149,19 @@ std::string Num(double v) {
   std::ostringstream s;
   s << std::setprecision(9) << v;
   return s.str();
+}
+
+std::string EvidenceJson(const WindowEvidence& e) {
+  std::ostringstream j;
+  j << "\"evidence\": {\"on_plane\": " << e.on_plane << ", \"behind\": " << e.behind
+    << ", \"ground\": " << e.ground << ", \"in_front\": " << e.in_front
+    << ", \"ring_on_plane\": " << e.ring_on_plane << ", \"ring_observed\": " << e.ring_observed
+    << ", \"covered_width_m\": " << Num(e.covered_width_m)
+    << ", \"covered_height_m\": " << Num(e.covered_height_m)
+    << ", \"cut_off\": {\"pixels\": " << e.cut_off_px << ", \"below_m\": " << Num(e.cut_off_below_m)
+    << ", \"above_m\": " << Num(e.cut_off_above_m) << ", \"left_m\": " << Num(e.cut_off_left_m)
+    << ", \"right_m\": " << Num(e.cut_off_right_m) << "}}";
+  return j.str();
 }
 
 std::string Vec(const Eigen::Vector3d& v) {
@@ -200,6 +234,8 @@ std::string DetectionJson(const ExtractResult& r, const camera::Intrinsics& in,
   if (!r.region.pixels.empty())
     j << ", \"region_bbox\": [" << r.region.u_min << ", " << r.region.v_min << ", "
       << r.region.u_max + 1 << ", " << r.region.v_max + 1 << "]";
+  if (d.found) j << ", " << EvidenceJson(d.evidence);
+  j << ", \"excluded_pixels\": " << r.excluded_pixels;
   j << ", \"inlier_pixels\": " << d.inlier_pixels << ", \"cloud_points\": " << d.cloud_points
     << ", \"ground_found\": " << (d.ground_found ? "true" : "false")
     << ", \"ground_inliers\": " << d.ground_inliers;
@@ -213,7 +249,10 @@ std::string DetectionJson(const ExtractResult& r, const camera::Intrinsics& in,
     j << (k ? ", " : "") << "{\"cluster\": " << c.cluster << ", \"inliers\": " << c.inliers
       << ", \"width_m\": " << Num(c.width_m) << ", \"height_m\": " << Num(c.height_m)
       << ", \"range_m\": " << Num(c.range_m) << ", \"off_axis_deg\": " << Num(c.off_axis_deg)
-      << ", \"cost\": " << Num(c.cost) << ", \"chosen\": "
+      << ", \"see_through\": " << Num(c.see_through)
+      << ", \"ring_share\": " << Num(c.ring_share) << ", " << EvidenceJson(c.evidence)
+      << ", \"cost\": " << Num(c.cost)
+      << ", \"chosen\": "
       << (static_cast<int>(k) == d.chosen ? "true" : "false")
       << ", \"rejected\": " << Quote(c.rejected) << "}";
   }

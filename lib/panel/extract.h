@@ -27,7 +27,8 @@ struct PixelBox {
 struct ExtractResult {
   records::PanelMetrics metrics;  // status "ok", "no_panel" or "error", with message
   PanelDetection detection;      // automatic mode only
-  metrics::PanelRegion region;
+  metrics::PanelRegion region;  // the panel's rectangle less the pixels shown not to be the panel
+  int excluded_pixels = 0;      // rectangle pixels that showed something else than the panel
   metrics::KernelResult measure;
   std::uint64_t frames_read = 0; // frames read, over every pass
   int passes = 0;

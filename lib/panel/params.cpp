@@ -71,6 +71,14 @@ const std::map<std::string, Setter>& Table() {
       {"ransac_probability", D(&PanelParams::ransac_probability)},
       {"max_facing_angle_deg", D(&PanelParams::max_facing_angle_deg)},
       {"refine_iterations", I(&PanelParams::refine_iterations)},
+      {"evidence_sigma_k", D(&PanelParams::evidence_sigma_k)},
+      {"see_through_weight", D(&PanelParams::see_through_weight)},
+      {"front_weight", D(&PanelParams::front_weight)},
+      {"search_extent", D(&PanelParams::search_extent)},
+      {"max_see_through", D(&PanelParams::max_see_through)},
+      {"max_ring_share", D(&PanelParams::max_ring_share)},
+      {"ring_width_frac", D(&PanelParams::ring_width_frac)},
+      {"min_coverage", D(&PanelParams::min_coverage)},
       {"use_search_window", B(&PanelParams::use_search_window)},
       {"window_distance_frac", D(&PanelParams::window_distance_frac)},
       {"window_distance_m", D(&PanelParams::window_distance_m)},
@@ -119,6 +127,14 @@ bool PanelParams::IsValid(std::string* why) const {
   if (!(max_facing_angle_deg > 0 && max_facing_angle_deg <= 90))
     return fail("max_facing_angle_deg must be in (0, 90]");
   if (refine_iterations < 1) return fail("refine_iterations must be at least 1");
+  if (!(evidence_sigma_k > 0) || !(see_through_weight >= 0) || !(front_weight >= 0))
+    return fail("evidence_sigma_k must be positive, the window weights not negative");
+  if (!(search_extent >= 0.25 && search_extent <= 5))
+    return fail("search_extent must be in [0.25, 5] panel sizes");
+  if (!(max_see_through > 0 && max_see_through <= 1) || !(max_ring_share > 0 && max_ring_share <= 1))
+    return fail("max_see_through and max_ring_share must be in (0, 1]");
+  if (!(ring_width_frac > 0 && ring_width_frac <= 1)) return fail("ring_width_frac must be in (0, 1]");
+  if (!(min_coverage >= 0 && min_coverage <= 1)) return fail("min_coverage must be in [0, 1]");
   if (!(window_distance_frac >= 0) || !(window_distance_m >= 0) || !(window_angle_deg > 0))
     return fail("search window sizes must not be negative");
   if (!(region_margin_px >= 0 && region_margin_px < 20))

@@ -54,6 +54,25 @@ struct PanelParams {
   double max_facing_angle_deg = 75.0;  // panel normal vs direction to the camera
   int refine_iterations = 3;
 
+  // The panel's known size fitted on a candidate plane (panel/panel_fit.h): observed pixels are
+  // on the plane, behind it, in front of it or on the ground when their mean depth departs from
+  // the plane by more than evidence_sigma_k·σ_Z/√n + plane_distance_m. The window maximises
+  // on − see_through_weight·(behind + ground) − front_weight·in front over a search area of
+  // search_extent panel sizes on each side of the candidate.
+  double evidence_sigma_k = 4.0;
+  double see_through_weight = 2.0;
+  double front_weight = 0.5;
+  double search_extent = 0.75;
+  // A panel is solid and stands free: a candidate is refused when more than max_see_through of
+  // its window's observed pixels show the background or the ground, when more than
+  // max_ring_share of a ring ring_width_frac·size wide around the window lies on its plane (a
+  // wall, a hedge), or when the plane's pixels cover less than min_coverage of its width or
+  // height (a smaller object).
+  double max_see_through = 0.25;
+  double max_ring_share = 0.25;
+  double ring_width_frac = 0.15;
+  double min_coverage = 0.6;
+
   // Optional search window from the manifest's nominal distance and angle (when known).
   bool use_search_window = true;
   double window_distance_frac = 0.3;  // |range − nominal| ≤ frac·nominal + window_distance_m

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "records/depth_frame.h"
 #include "camera/intrinsics.h"

@@ -1,0 +1,321 @@
+#include "panel/panel_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+
+#include "camera/intrinsics.h"
+
+namespace depthbias::panel {
+namespace {
+
+// Depth noise of one sample at depth Z: σ_Z = Z²·σ_d / (f·B).
+double DepthSigma(double depth_m, double focal_px, const PanelParams& p) {
+  return depth_m * depth_m * p.expected_subpixel_rms_px / (focal_px * p.baseline_m);
+}
+
+// Grid of cells over the searched part of the plane, one count per class, with prefix sums.
+class EvidenceGrid {
+ public:
+  enum Channel { kOn = 0, kNegative, kFront, kObserved, kChannels };
+  EvidenceGrid(int ns, int nt) : ns_(ns), nt_(nt), cells_(kChannels * ns * nt, 0) {}
+  void Add(int i, int j, PixelClass c) {
+    int* cell = &cells_[kChannels * (j * ns_ + i)];
+    ++cell[kObserved];
+    if (c == PixelClass::kOnPlane) ++cell[kOn];
+    if (c == PixelClass::kBehind || c == PixelClass::kGround) ++cell[kNegative];
+    if (c == PixelClass::kInFront) ++cell[kFront];
+  }
+  int Cell(int i, int j, Channel ch) const { return cells_[kChannels * (j * ns_ + i) + ch]; }
+  void Integrate() {
+    sums_.assign(static_cast<std::size_t>(kChannels) * (ns_ + 1) * (nt_ + 1), 0);
+    for (int j = 0; j < nt_; ++j)
+      for (int i = 0; i < ns_; ++i)
+        for (int ch = 0; ch < kChannels; ++ch)
+          Sum(i + 1, j + 1, ch) = Cell(i, j, static_cast<Channel>(ch)) + Sum(i, j + 1, ch) +
+                                  Sum(i + 1, j, ch) - Sum(i, j, ch);
+  }
+  // Total of cells [i0, i1) × [j0, j1), clipped to the grid.
+  long Box(int i0, int j0, int i1, int j1, Channel ch) const {
+    i0 = std::clamp(i0, 0, ns_);
+    i1 = std::clamp(i1, 0, ns_);
+    j0 = std::clamp(j0, 0, nt_);
+    j1 = std::clamp(j1, 0, nt_);
+    if (i1 <= i0 || j1 <= j0) return 0;
+    return SumAt(i1, j1, ch) - SumAt(i0, j1, ch) - SumAt(i1, j0, ch) + SumAt(i0, j0, ch);
+  }
+  int ns() const { return ns_; }
+  int nt() const { return nt_; }
+
+ private:
+  long& Sum(int i, int j, int ch) {
+    return sums_[static_cast<std::size_t>(kChannels) * (j * (ns_ + 1) + i) + ch];
+  }
+  long SumAt(int i, int j, int ch) const {
+    return sums_[static_cast<std::size_t>(kChannels) * (j * (ns_ + 1) + i) + ch];
+  }
+  int ns_, nt_;
+  std::vector<int> cells_;
+  std::vector<long> sums_;
+};
+
+struct Observed {
+  std::uint32_t pixel;
+  int cell_i, cell_j;
+  PixelClass cls;
+};
+
+}  // namespace
+
+PixelClass ClassifyPixel(const metrics::RayTable& rays, const DepthAccumulator& acc,
+                         std::uint32_t pixel, const metrics::Plane& plane,
+                         const metrics::Plane* ground, const PanelParams& p) {
+  const std::uint32_t n = acc.Count(pixel);
+  if (n == 0) return PixelClass::kHole;
+  const Eigen::Vector3d ray = rays.Ray(pixel);
+  const double z = acc.MeanDepth(pixel);
+  if (ground && ground->Distance(z * ray) < p.ground_distance_m) return PixelClass::kGround;
+  const double zp = plane.DepthOnRay(ray);
+  if (!std::isfinite(zp)) return PixelClass::kBehind;  // the ray misses the plane
+  const double limit =
+      p.evidence_sigma_k * DepthSigma(zp, rays.intrinsics().fx, p) / std::sqrt(n) +
+      p.plane_distance_m;
+  if (z - zp > limit) return PixelClass::kBehind;
+  if (zp - z > limit) return PixelClass::kInFront;
+  return PixelClass::kOnPlane;
+}
+
+WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& acc,
+                         const metrics::Plane& plane, const Eigen::Vector3d& up_hint,
+                         const metrics::Plane* ground, const Eigen::Vector3d& seed_m,
+                         const PanelParams& p) {
+  WindowFit fit;
+  metrics::PanelRectangle area;
+  area.plane = plane;
+  if (!metrics::PanelAxes(plane, up_hint, &area.axis_width, &area.axis_up)) {
+    fit.message = "horizontal or degenerate plane";
+    return fit;
+  }
+  area.center_m = seed_m - plane.Distance(seed_m) * plane.normal;
+  if (!(area.center_m.z() > 0)) {
+    fit.message = "plane behind the camera";
+    return fit;
+  }
+  const double w = p.panel_width_m, h = p.panel_height_m;
+  const double half_s = w * (0.5 + p.search_extent), half_t = h * (0.5 + p.search_extent);
+  area.width_m = 2 * half_s;
+  area.height_m = 2 * half_t;
+
+  // Cells of a quarter of a pixel's footprint, at most kMaxCells per side.
+  const camera::Intrinsics& in = rays.intrinsics();
+  const Eigen::Vector2d foot = metrics::PixelFootprint(in, area);
+  constexpr int kMaxCells = 1000;
+  constexpr int kCellsPerPixel = 4;
+  double cell_m = std::min(foot.x(), foot.y()) / kCellsPerPixel;
+  cell_m = std::max({cell_m, 2 * half_s / kMaxCells, 2 * half_t / kMaxCells, 1e-4});
+  const int ns = static_cast<int>(std::ceil(2 * half_s / cell_m));
+  const int nt = static_cast<int>(std::ceil(2 * half_t / cell_m));
+
+  // Image bounding box of the searched area (the whole image when a corner is behind).
+  int u0 = 0, v0 = 0, u1 = in.width - 1, v1 = in.height - 1;
+  {
+    double umin = 1e18, umax = -1e18, vmin = 1e18, vmax = -1e18;
+    bool all_front = true;
+    for (const Eigen::Vector3d& corner : area.Corners()) {
+      if (!(corner.z() > 1e-3)) {
+        all_front = false;
+        break;
+      }
+      const Eigen::Vector2d px = camera::Project(in, corner);
+      umin = std::min(umin, px.x());
+      umax = std::max(umax, px.x());
+      vmin = std::min(vmin, px.y());
+      vmax = std::max(vmax, px.y());
+    }
+    if (all_front) {
+      u0 = std::max(0, static_cast<int>(std::floor(umin)) - 1);
+      v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 1);
+      u1 = std::min(in.width - 1, static_cast<int>(std::ceil(umax)) + 1);
+      v1 = std::min(in.height - 1, static_cast<int>(std::ceil(vmax)) + 1);
+    }
+  }
+
+  EvidenceGrid grid(ns, nt);
+  std::vector<Observed> observed;
+  Eigen::Vector2d st;
+  for (int v = v0; v <= v1; ++v) {
+    for (int u = u0; u <= u1; ++u) {
+      const std::uint32_t i = static_cast<std::uint32_t>(v) * in.width + u;
+      if (acc.Count(i) == 0) continue;
+      if (!area.PlaneCoordinates(rays.Ray(i), &st)) continue;
+      const int ci = static_cast<int>(std::floor((st.x() + half_s) / cell_m));
+      const int cj = static_cast<int>(std::floor((st.y() + half_t) / cell_m));
+      if (ci < 0 || cj < 0 || ci >= ns || cj >= nt) continue;
+      const PixelClass cls = ClassifyPixel(rays, acc, i, plane, ground, p);
+      grid.Add(ci, cj, cls);
+      observed.push_back({i, ci, cj, cls});
+    }
+  }
+  grid.Integrate();
+
+  // The window of the panel's size with the best evidence.
+  // The ring starts one pixel footprint beyond the window: pixels straddling the edge are not
+  // counted in it.
+  const int ws = std::max(1, static_cast<int>(std::lround(w / cell_m)));
+  const int wt = std::max(1, static_cast<int>(std::lround(h / cell_m)));
+  const int kGuard = kCellsPerPixel;
+  // Windows whose ring lies inside the searched area.
+  const int ring = kGuard + std::max(1, static_cast<int>(std::lround(
+                                          p.ring_width_frac * std::max(w, h) / cell_m)));
+  if (ws + 2 * ring > ns || wt + 2 * ring > nt) {
+    fit.message = "searched area smaller than the panel";
+    return fit;
+  }
+  auto score_at = [&](int i, int j) {
+    return grid.Box(i, j, i + ws, j + wt, EvidenceGrid::kOn) -
+           p.see_through_weight * grid.Box(i, j, i + ws, j + wt, EvidenceGrid::kNegative) -
+           p.front_weight * grid.Box(i, j, i + ws, j + wt, EvidenceGrid::kFront);
+  };
+  double best = -std::numeric_limits<double>::infinity();
+  int bi = ring, bj = ring;
+  for (int j = ring; j + wt + ring <= nt; ++j) {
+    for (int i = ring; i + ws + ring <= ns; ++i) {
+      const double score = score_at(i, j);
+      if (score > best) {
+        best = score;
+        bi = i;
+        bj = j;
+      }
+    }
+  }
+  // Where nothing observed bounds the panel (holes around it), windows tie over a range of
+  // positions: take the middle of the run of ties through the best one, along each axis.
+  {
+    int lo = bi, hi = bi;
+    while (lo - 1 >= ring && score_at(lo - 1, bj) >= best) --lo;
+    while (hi + 1 + ws + ring <= ns && score_at(hi + 1, bj) >= best) ++hi;
+    bi = (lo + hi) / 2;
+    lo = hi = bj;
+    while (lo - 1 >= ring && score_at(bi, lo - 1) >= best) --lo;
+    while (hi + 1 + wt + ring <= nt && score_at(bi, hi + 1) >= best) ++hi;
+    bj = (lo + hi) / 2;
+  }
+  WindowEvidence& ev = fit.evidence;
+  ev.on_plane = static_cast<int>(grid.Box(bi, bj, bi + ws, bj + wt, EvidenceGrid::kOn));
+  if (ev.on_plane < 3) {
+    fit.message = "no observed pixel of the plane in any panel-sized window";
+    return fit;
+  }
+  const double s0 = -half_s + bi * cell_m, s1 = s0 + ws * cell_m;
+  const double t0 = -half_t + bj * cell_m, t1 = t0 + wt * cell_m;
+  ev.ring_on_plane =
+      static_cast<int>(grid.Box(bi - ring, bj - ring, bi + ws + ring, bj + wt + ring,
+                                EvidenceGrid::kOn) -
+                       grid.Box(bi - kGuard, bj - kGuard, bi + ws + kGuard, bj + wt + kGuard,
+                                EvidenceGrid::kOn));
+
+  metrics::PanelRectangle& rect = fit.rect;
+  rect = area;
+  rect.center_m = area.center_m + 0.5 * (s0 + s1) * area.axis_width + 0.5 * (t0 + t1) * area.axis_up;
+  rect.width_m = w;
+  rect.height_m = h;
+
+  double cs_lo = 1e18, cs_hi = -1e18, ct_lo = 1e18, ct_hi = -1e18;
+  int ring_all = 0;
+  for (const Observed& o : observed) {
+    const bool in_s = o.cell_i >= bi && o.cell_i < bi + ws;
+    const bool in_t = o.cell_j >= bj && o.cell_j < bj + wt;
+    const double s = -half_s + (o.cell_i + 0.5) * cell_m;
+    const double t = -half_t + (o.cell_j + 0.5) * cell_m;
+    if (in_s && in_t) {
+      switch (o.cls) {
+        case PixelClass::kOnPlane:
+          fit.on_plane_pixels.push_back(o.pixel);
+          cs_lo = std::min(cs_lo, s);
+          cs_hi = std::max(cs_hi, s);
+          ct_lo = std::min(ct_lo, t);
+          ct_hi = std::max(ct_hi, t);
+          break;
+        case PixelClass::kBehind: ++ev.behind; break;
+        case PixelClass::kGround: ++ev.ground; break;
+        case PixelClass::kInFront: ++ev.in_front; break;
+        case PixelClass::kHole: break;
+      }
+      continue;
+    }
+    const bool in_ring = o.cell_i >= bi - ring && o.cell_i < bi + ws + ring &&
+                         o.cell_j >= bj - ring && o.cell_j < bj + wt + ring;
+    const bool in_guard = o.cell_i >= bi - kGuard && o.cell_i < bi + ws + kGuard &&
+                          o.cell_j >= bj - kGuard && o.cell_j < bj + wt + kGuard;
+    ring_all += in_ring && !in_guard;
+    if (o.cls != PixelClass::kOnPlane) continue;
+    ++ev.cut_off_px;
+    if (s < s0) ev.cut_off_left_m = std::max(ev.cut_off_left_m, s0 - s);
+    if (s > s1) ev.cut_off_right_m = std::max(ev.cut_off_right_m, s - s1);
+    if (t < t0) ev.cut_off_below_m = std::max(ev.cut_off_below_m, t0 - t);
+    if (t > t1) ev.cut_off_above_m = std::max(ev.cut_off_above_m, t - t1);
+  }
+  ev.ring_observed = ring_all;
+  ev.covered_width_m = cs_hi - cs_lo + cell_m;
+  ev.covered_height_m = ct_hi - ct_lo + cell_m;
+  std::sort(fit.on_plane_pixels.begin(), fit.on_plane_pixels.end());
+  fit.success = true;
+  return fit;
+}
+
+WindowFit FitAndRefinePanel(const metrics::RayTable& rays, const DepthAccumulator& acc,
+                            metrics::Plane plane, const Eigen::Vector3d& up_hint,
+                            const metrics::Plane* ground, const Eigen::Vector3d& seed_m,
+                            const PanelParams& p, double* plane_rms_m) {
+  WindowFit fit = FitPanelWindow(rays, acc, plane, up_hint, ground, seed_m, p);
+  for (int it = 0; it < p.refine_iterations && fit.success; ++it) {
+    // Plane in inverse depth over the window's on-plane pixels, 1/Z = k·(x/z, y/z, 1), each
+    // pixel's mean weighted by its samples: least squares for noise along the rays.
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+    for (std::uint32_t i : fit.on_plane_pixels) {
+      const Eigen::Vector3d a = rays.Ray(i);
+      const double n = acc.Count(i);
+      ata += n * a * a.transpose();
+      atb += n / acc.MeanDepth(i) * a;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+    const Eigen::Vector3d k = ldlt.solve(atb);
+    const double len = k.norm();
+    if (fit.on_plane_pixels.size() < 3 || ldlt.info() != Eigen::Success ||
+        !(ldlt.rcond() > 1e-12) || !std::isfinite(len) || !(len > 0))
+      break;
+    metrics::Plane refined;
+    refined.normal = -k / len;
+    refined.offset_m = 1.0 / len;
+    WindowFit next = FitPanelWindow(rays, acc, refined, up_hint, ground, fit.rect.center_m, p);
+    if (!next.success) break;
+    plane = refined;
+    fit = std::move(next);
+  }
+  if (plane_rms_m && fit.success) {
+    metrics::PlaneMoments m;
+    for (std::uint32_t i : fit.on_plane_pixels) m.Add(acc.MeanDepth(i) * rays.Ray(i), acc.Count(i));
+    const metrics::PlaneFit f = metrics::FitPlane(m);
+    *plane_rms_m = f.ok ? f.rms_m : 0.0;
+  }
+  return fit;
+}
+
+std::vector<std::uint32_t> PixelsNotOnPanel(const metrics::RayTable& rays,
+                                            const DepthAccumulator& acc,
+                                            const metrics::PanelRegion& region,
+                                            const metrics::Plane& plane,
+                                            const metrics::Plane* ground,
+                                            const PanelParams& p) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t i : region.pixels) {
+    const PixelClass c = ClassifyPixel(rays, acc, i, plane, ground, p);
+    if (c != PixelClass::kHole && c != PixelClass::kOnPlane) out.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace depthbias::panel
