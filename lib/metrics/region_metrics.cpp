@@ -199,6 +199,25 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
       used += s.n;
     }
     if (used > 0) m->subpixel_rms_px = fb * std::sqrt(sq / static_cast<double>(used));
+    // Tilt's standard error: Cov(k) = s²·(AᵀA)⁻¹, s² the residual variance in inverse depth,
+    // propagated through tilt(k) = acos(|k_z|/|k|) by central differences.
+    if (used > 3) {
+      const double s2 = sq / static_cast<double>(used - 3);
+      const Eigen::Matrix3d cov = s2 * ldlt.solve(Eigen::Matrix3d::Identity());
+      auto tilt = [](const Eigen::Vector3d& v) {
+        return std::acos(std::min(1.0, std::fabs(v.z()) / v.norm()));
+      };
+      Eigen::Vector3d grad;
+      for (int a = 0; a < 3; ++a) {
+        const double h = 1e-6 * len;
+        Eigen::Vector3d hi = kv, lo = kv;
+        hi[a] += h;
+        lo[a] -= h;
+        grad[a] = (tilt(hi) - tilt(lo)) / (2 * h);
+      }
+      const double var = grad.dot(cov * grad);
+      if (var >= 0 && std::isfinite(var)) res.tilt_sigma_deg = std::sqrt(var) * kRadToDeg;
+    }
     // Extent and direction of the panel: the sampled pixels on the plane.
     res.rectangle_ok = RectangleFromRays(intrinsics_, pl, up_m, sampled_rays,
                                          1.0 + 2.0 * params_.region_margin_px, &res.rectangle);

@@ -55,6 +55,9 @@ struct KernelResult {
   PlaneFit plane;               // total-least-squares plane of every sample
   bool disparity_plane_ok = false;
   Plane disparity_plane;        // the inverse-depth plane (tilt, subpixel RMS)
+  // Standard error of normal_tilt_deg from the inverse-depth fit's covariance (linearized): the
+  // tilt a recording can resolve. Far, hole-ridden panels have a few degrees.
+  double tilt_sigma_deg = records::PanelMetrics::kMissing;
   bool rectangle_ok = false;
   PanelRectangle rectangle;     // sampled pixels on the disparity plane
   std::uint64_t samples = 0;    // valid samples pooled over frames
