@@ -91,11 +91,14 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     return res;
   }
 
-  // Automatic mode, pass 1: pool the first detection_frames frames (every frame for 0) and find
-  // the panel. Pass 2 reads the recording again from the start to measure the region: reading
-  // the pooled frames twice costs less than keeping them (allocating their memory costs more
-  // than reading them again from the page cache).
+  // Automatic mode: pool the first detection_frames frames (every frame for 0) and find the
+  // panel. With keep_detection_frames (and a bounded detection_frames) the pooled frames are
+  // kept, measured, and the recording read on from where pooling stopped: every frame is read
+  // and decompressed once, and memory is bounded by detection_frames, not by the recording's
+  // length. Otherwise the recording is read again from the start to measure.
   const std::uint64_t limit = static_cast<std::uint64_t>(params.detection_frames);
+  const bool keep = params.keep_detection_frames && limit > 0;
+  std::vector<records::DepthFrame> pooled;
   DepthAccumulator acc(intrinsics.width, intrinsics.height);
   res.passes = 1;
   while (limit == 0 || acc.frames() < limit) {
@@ -103,6 +106,10 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
     ++res.frames_read;
     if (!FrameMatches(frame, intrinsics, &why)) return Fail(&res, "error", why);
     acc.Add(frame);
+    if (keep) {
+      pooled.push_back(std::move(frame));
+      frame = records::DepthFrame();
+    }
   }
   if (acc.frames() == 0) return Fail(&res, "error", "the recording holds no depth frame");
   res.detection = DetectPanel(rays, acc, params, window);
@@ -129,11 +136,17 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   if (res.region.pixels.empty())
     return Fail(&res, "no_panel", "no pixel of the panel's region shows the panel");
 
-  // Pass 2: measure the region over every frame.
-  if (!source.Rewind())
-    return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
-  res.passes = 2;
+  // Measure the region over every frame.
   metrics::RegionMetrics kernel(intrinsics, res.region, KernelParamsOf(params));
+  if (keep) {
+    for (const records::DepthFrame& f : pooled) kernel.AddFrame(f);
+    pooled.clear();
+    pooled.shrink_to_fit();
+  } else {
+    if (!source.Rewind())
+      return Fail(&res, "error", "cannot read the recording a second time to measure the panel");
+    res.passes = 2;
+  }
   if (!MeasureAll(source, intrinsics, &frame, &kernel, &res.frames_read, &why))
     return Fail(&res, "error", why);
   const Eigen::Vector3d up = res.detection.panel.axis_up;

@@ -53,6 +53,7 @@ const std::map<std::string, Setter>& Table() {
       {"baseline_m", D(&PanelParams::baseline_m)},
       {"expected_subpixel_rms_px", D(&PanelParams::expected_subpixel_rms_px)},
       {"detection_frames", I(&PanelParams::detection_frames)},
+      {"keep_detection_frames", B(&PanelParams::keep_detection_frames)},
       {"block_px", I(&PanelParams::block_px)},
       {"max_depth_m", D(&PanelParams::max_depth_m)},
       {"min_depth_m", D(&PanelParams::min_depth_m)},

@@ -24,6 +24,9 @@ struct PanelParams {
   // Accumulation: the first detection_frames frames of the static scene are pooled for
   // detection (0: every frame); then the recording is read again from the start to measure.
   int detection_frames = 30;
+  // Keep the pooled frames to measure them (memory: detection_frames frames, 1.8 MB each at
+  // 1280×720) instead of reading the recording a second time from the start.
+  bool keep_detection_frames = true;
 
   // Detection cloud: the accumulated depth image binned into blocks of block_px × block_px;
   // 0 picks width / 320 (4 at 1280×720).

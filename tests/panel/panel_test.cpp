@@ -122,9 +122,36 @@ TEST(PanelDetect, SparsePanelIsFoundFromPooledFrames) {
   ASSERT_TRUE(r.detection.found) << r.detection.why_not;
   EXPECT_GE(IoU(r.region, scene.footprint), 0.85);
   EXPECT_NEAR(r.metrics.hole_rate_pct, 99.0, 1.0);
-  EXPECT_EQ(r.passes, 2);  // pooled for detection, then read again to measure
-  EXPECT_EQ(src.rewinds, 1);
-  EXPECT_EQ(r.frames_read, 60u);
+  EXPECT_EQ(r.passes, 1);  // the pooled frames are kept and measured: each read once
+  EXPECT_EQ(src.rewinds, 0);
+  EXPECT_EQ(r.frames_read, 30u);
+  EXPECT_EQ(r.metrics.frames, 30);
+}
+
+// Without keeping the pooled frames, the recording is read again from the start, and the
+// measurement is the same.
+TEST(PanelDetect, ReadingTwiceMeasuresTheSame) {
+  SceneSpec s;
+  s.distance_m = 8;
+  s.hole_rate = 0.9;
+  s.frames = 40;  // more than detection_frames: the kept frames and the rest are both measured
+  const Scene scene(s);
+  VectorSource once(&scene), twice(&scene);
+  PanelParams p;
+  const ExtractResult a = ExtractPanel(once, scene.in, p);
+  p.keep_detection_frames = false;
+  const ExtractResult b = ExtractPanel(twice, scene.in, p);
+  ASSERT_EQ(a.metrics.status, "ok") << a.metrics.message;
+  ASSERT_EQ(b.metrics.status, "ok") << b.metrics.message;
+  EXPECT_EQ(a.passes, 1);
+  EXPECT_EQ(a.frames_read, 40u);
+  EXPECT_EQ(b.passes, 2);
+  EXPECT_EQ(b.frames_read, 70u);
+  EXPECT_EQ(a.metrics.frames, 40);
+  EXPECT_EQ(a.metrics.median_m, b.metrics.median_m);
+  EXPECT_EQ(a.metrics.mean_m, b.metrics.mean_m);
+  EXPECT_EQ(a.metrics.hole_rate_pct, b.metrics.hole_rate_pct);
+  EXPECT_EQ(a.metrics.normal_tilt_deg, b.metrics.normal_tilt_deg);
 }
 
 // detection_frames = 0 pools every frame and measures in a second pass over the source.
