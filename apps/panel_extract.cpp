@@ -10,6 +10,7 @@
 
 #include "args.h"
 #include "camera/presets.h"
+#include "common/parallel.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/bag_list.h"
@@ -164,25 +165,19 @@ int main(int argc, char** argv) {
   }
 
   const bool progress = !o.quiet && isatty(STDERR_FILENO);
-  std::atomic<std::size_t> next{0}, done{0};
+  std::size_t done = 0;
   std::mutex print;
-  auto worker = [&] {
-    for (std::size_t k; (k = next++) < jobs.size();) {
-      Run(&jobs[k], o, params, manifest.get(), boxes);
-      std::lock_guard<std::mutex> lock(print);
-      ++done;
-      if (!jobs[k].row.ok())
-        std::cerr << (progress ? "\r\033[K" : "") << jobs[k].row.bag << ": "
-                  << jobs[k].row.status << ": " << jobs[k].row.message << "\n";
-      if (progress)
-        std::cerr << "\r\033[K[" << done << "/" << jobs.size() << "] " << jobs[k].row.bag
-                  << std::flush;
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int t = 0; t < std::min<int>(o.jobs, static_cast<int>(jobs.size())); ++t)
-    threads.emplace_back(worker);
-  for (std::thread& t : threads) t.join();
+  common::ForEachIndex(jobs.size(), o.jobs, [&](std::size_t k) {
+    Run(&jobs[k], o, params, manifest.get(), boxes);
+    std::lock_guard<std::mutex> lock(print);
+    ++done;
+    if (!jobs[k].row.ok())
+      std::cerr << (progress ? "\r\033[K" : "") << jobs[k].row.bag << ": "
+                << jobs[k].row.status << ": " << jobs[k].row.message << "\n";
+    if (progress)
+      std::cerr << "\r\033[K[" << done << "/" << jobs.size() << "] " << jobs[k].row.bag
+                << std::flush;
+  });
   if (progress) std::cerr << "\r\033[K";
 
   std::vector<records::PanelMetrics> rows;

@@ -1,12 +1,11 @@
 #include "panel/detect.h"
 
+#include "common/text.h"
 #include "panel/panel_fit.h"
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <numeric>
-#include <sstream>
 
 // PCL's templates are instantiated here from its headers, so that only libpcl_common is linked:
 // loading libpcl_segmentation and the libraries it drags in (features, filters, ...) costs
@@ -81,13 +80,6 @@ RansacOut RunRansac(const pcl::SampleConsensusModel<pcl::PointXYZ>::Ptr& model,
 // Depth noise of one sample at depth Z: σ_Z = Z²·σ_d / (f·B).
 double DepthSigma(double depth_m, double focal_px, const PanelParams& p) {
   return depth_m * depth_m * p.expected_subpixel_rms_px / (focal_px * p.baseline_m);
-}
-
-// A number as a person reads it: 3 significant digits, no trailing zeros ("1 x 1.2 m").
-std::string Text(double v) {
-  std::ostringstream s;
-  s << std::setprecision(3) << v;
-  return s.str();
 }
 
 // One point of the detection cloud: the best-observed pixel of a block.
@@ -308,13 +300,13 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
       cand.ring_share = ev.RingShare();
       const double coverage = std::min(cand.width_m / nominal_w, cand.height_m / nominal_h);
       if (coverage < p.min_coverage) {
-        cand.rejected = "its pixels cover only " + Text(cand.width_m) + " x " +
-                        Text(cand.height_m) + " m of the panel's size";
+        cand.rejected = "its pixels cover only " + common::Text(cand.width_m) + " x " +
+                        common::Text(cand.height_m) + " m of the panel's size";
       } else if (cand.see_through > p.max_see_through) {
-        cand.rejected = "the background shows through " + Text(100 * cand.see_through) +
+        cand.rejected = "the background shows through " + common::Text(100 * cand.see_through) +
                         " % of it: not a solid panel";
       } else if (cand.ring_share > p.max_ring_share) {
-        cand.rejected = "the plane continues around it (" + Text(100 * cand.ring_share) +
+        cand.rejected = "the plane continues around it (" + common::Text(100 * cand.ring_share) +
                         " %): part of a larger surface";
       } else if (cand.facing_deg > p.max_facing_angle_deg) {
         cand.rejected = "does not face the camera";
@@ -348,8 +340,8 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
     if (best < 0 || det.candidates[k].cost < det.candidates[best].cost) best = static_cast<int>(k);
   }
   if (best < 0) {
-    det.why_not = "no solid, free-standing plane of " + Text(nominal_w) + " x " +
-                  Text(nominal_h) + " m facing the camera among " +
+    det.why_not = "no solid, free-standing plane of " + common::Text(nominal_w) + " x " +
+                  common::Text(nominal_h) + " m facing the camera among " +
                   std::to_string(det.candidates.size()) + " planes in " +
                   std::to_string(clusters.size()) + " clusters";
     return det;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "records/panel_metrics.h"
+#include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {

@@ -6,7 +6,7 @@
 #include <future>
 #include <mutex>
 
-#include "sim/parallel.h"
+#include "common/parallel.h"
 
 namespace depthbias::sim {
 namespace {
@@ -55,7 +55,7 @@ std::vector<RenderedRecording> RenderProtocol(const SimParams& params,
   std::atomic<bool> stop{false};
   std::exception_ptr error;
   std::mutex error_mutex;
-  detail::ForEachIndex(cells.size(), workers, [&](size_t i) {
+  common::ForEachIndex(cells.size(), workers, [&](size_t i) {
     if (stop) return;
     try {
       if (!RenderRecording(params, cells[i], per_recording, open(cells[i]), stop)) return;

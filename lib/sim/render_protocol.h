@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "records/depth_frame.h"
+#include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {

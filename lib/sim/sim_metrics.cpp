@@ -7,8 +7,8 @@
 #include <stdexcept>
 
 #include "metrics/region_metrics.h"
-#include "sim/parallel.h"
-#include "sim/stereo_sim.h"
+#include "common/parallel.h"
+#include "sim/sim_metrics.h"
 
 namespace depthbias::sim {
 namespace {
@@ -42,6 +42,22 @@ Window PanelWindow(const SimParams& params, const Cell& cell, int pad) {
 }
 
 }  // namespace
+
+bool MetricsParams::IsValid(std::string* why) const {
+  if (!(region_margin_px >= 0 && region_margin_px <= 100)) {
+    if (why) *why = "region_margin_px must be in [0, 100]";
+    return false;
+  }
+  if (frames < 0) {
+    if (why) *why = "frames must be >= 0";
+    return false;
+  }
+  if (threads < 1 || threads > 256) {
+    if (why) *why = "threads must be in [1, 256]";
+    return false;
+  }
+  return true;
+}
 
 CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
                                   const MetricsParams& mp) {
@@ -108,7 +124,7 @@ std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
                                                     const std::vector<Cell>& cells,
                                                     const MetricsParams& metrics) {
   std::vector<CellMetricsResult> out(cells.size());
-  detail::ForEachIndex(cells.size(), metrics.threads,
+  common::ForEachIndex(cells.size(), metrics.threads,
                        [&](size_t i) { out[i] = SimulateMetrics(params, cells[i], metrics); });
   return out;
 }

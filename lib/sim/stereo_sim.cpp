@@ -1,5 +1,7 @@
 #include "sim/stereo_sim.h"
 
+#include "common/parallel.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -26,17 +28,10 @@ inline std::uint64_t Mix64(std::uint64_t z) {
 // Runs f(v_begin, v_end) over [0, rows) split into `threads` bands of rows.
 template <typename F>
 void ForRows(int rows, int threads, F f) {
-  threads = std::clamp(threads, 1, 16);
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) {
-    try {
-      pool.emplace_back(f, rows * t / threads, rows * (t + 1) / threads);
-    } catch (const std::system_error&) {  // no thread to be had: this one takes the band
-      f(rows * t / threads, rows * (t + 1) / threads);
-    }
-  }
-  f(0, rows / threads);
-  for (auto& t : pool) t.join();
+  common::ForEachBand(static_cast<std::size_t>(std::max(rows, 0)), std::clamp(threads, 1, 16),
+                      [&](std::size_t a, std::size_t b) {
+                        f(static_cast<int>(a), static_cast<int>(b));
+                      });
 }
 
 // The 32 bits of a pair hash that belong to draw `counter` (its low half for even counters).
@@ -129,21 +124,6 @@ bool SimParams::IsValid(std::string* why) const {
   return true;
 }
 
-bool MetricsParams::IsValid(std::string* why) const {
-  if (!(region_margin_px >= 0 && region_margin_px <= 100)) {
-    if (why) *why = "region_margin_px must be in [0, 100]";
-    return false;
-  }
-  if (frames < 0) {
-    if (why) *why = "frames must be >= 0";
-    return false;
-  }
-  if (threads < 1 || threads > 256) {
-    if (why) *why = "threads must be in [1, 256]";
-    return false;
-  }
-  return true;
-}
 
 std::uint64_t CellSeed(std::uint64_t seed, const std::string& cell_name) {
   std::uint64_t h = 0xCBF29CE484222325ULL;  // FNV-1a of the name

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sim/effects.h"
+#include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {

@@ -1,6 +1,9 @@
 #pragma once
-// Runs f(i) for i in [0, n) on up to `threads` threads, each taking the next index. The first
-// exception stops the hand-out of indices and is rethrown once every thread has finished.
+// The one parallel-for of the library and the apps. ForEachIndex runs f(i) for i in [0, n) on up
+// to `threads` threads, each taking the next index; ForEachBand splits [0, n) into `threads`
+// contiguous bands. The first exception stops the hand-out and is rethrown once every thread has
+// finished; when no more threads can be had, fewer workers do the work. Results never depend on
+// the thread count: each index is handled by exactly one call.
 
 #include <algorithm>
 #include <atomic>
@@ -11,7 +14,7 @@
 #include <thread>
 #include <vector>
 
-namespace depthbias::sim::detail {
+namespace depthbias::common {
 
 template <typename F>
 void ForEachIndex(std::size_t n, int threads, F f) {
@@ -41,4 +44,12 @@ void ForEachIndex(std::size_t n, int threads, F f) {
   if (error) std::rethrow_exception(error);
 }
 
-}  // namespace depthbias::sim::detail
+// f(begin, end) over `threads` contiguous bands of [0, n).
+template <typename F>
+void ForEachBand(std::size_t n, int threads, F f) {
+  const std::size_t bands = std::max<std::size_t>(1, std::min<std::size_t>(std::max(threads, 1), n));
+  ForEachIndex(bands, static_cast<int>(bands),
+               [&](std::size_t b) { f(n * b / bands, n * (b + 1) / bands); });
+}
+
+}  // namespace depthbias::common

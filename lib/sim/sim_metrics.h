@@ -1,0 +1,45 @@
+#pragma once
+// The metrics-only path: DESIGN.md's panel-metrics row of each recording, from the sensor model
+// evaluated on the panel's image region alone (no whole frames), measured by the one metrics
+// kernel (metrics/region_metrics.h) that panel_extract uses. What the gap diagnostic calls many
+// times.
+
+#include <vector>
+
+#include "records/panel_metrics.h"
+#include "sim/stereo_sim.h"
+
+namespace depthbias::sim {
+
+// Options of the metrics-only path.
+struct MetricsParams {
+  double region_margin_px = 0.5;  // panel rectangle shrunk by this many pixel footprints a side
+  int frames = 0;            // 0: the protocol's
+  int threads = 1;           // recordings evaluated in parallel (results do not depend on it)
+
+  bool IsValid(std::string* why) const;
+};
+
+// One recording's metrics (DESIGN.md's panel-metrics row), evaluated on the panel's image
+// footprint without rendering whole frames. bag = the recording's name + ".bag".
+struct CellMetricsResult {
+  records::PanelMetrics metrics;
+  CellTruth truth;
+  int region_px = 0;
+};
+CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
+                                  const MetricsParams& metrics = {});
+
+// The given recordings, in their order.
+std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
+                                                    const std::vector<Cell>& cells,
+                                                    const MetricsParams& metrics = {});
+
+// The true panel of a recording as a rectangle on its plane (normal toward the camera).
+metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose);
+
+// Every recording of the protocol, in MakeCells' order.
+std::vector<CellMetricsResult> SimulateProtocolMetrics(const SimParams& params,
+                                                       const MetricsParams& metrics = {});
+
+}  // namespace depthbias::sim
