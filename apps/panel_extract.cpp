@@ -2,14 +2,12 @@
 // recording (DESIGN.md's CSV), and optionally panels.json with what each detection found.
 #include <unistd.h>
 
-#include <atomic>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <mutex>
-#include <thread>
 
 #include "args.h"
-#include "camera/presets.h"
 #include "common/parallel.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
@@ -17,8 +15,8 @@
 #include "io/config_file.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
-#include "panel/extract.h"
-#include "panel/prefetch.h"
+#include "panel/params.h"
+#include "pipeline/extract_recording.h"
 
 using namespace depthbias;
 
@@ -32,21 +30,6 @@ const char* kUsage =
     "[--panels-out panels.json] [--jobs N] [--region-mode auto|box --boxes JSON] [--quiet] "
     "BAG_OR_DIR...";
 
-class BagSource : public panel::FrameSource {
- public:
-  explicit BagSource(std::string path) : path_(std::move(path)) { Rewind(); }
-  const io::BagInfo& info() const { return reader_->info(); }
-  bool Next(records::DepthFrame* f) override { return reader_->Next(f); }
-  bool Rewind() override {
-    reader_ = std::make_unique<io::BagReader>(path_);
-    return true;
-  }
-
- private:
-  std::string path_;
-  std::unique_ptr<io::BagReader> reader_;
-};
-
 struct Options {
   std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
   int jobs = 1;
@@ -59,58 +42,6 @@ struct Job {
   records::PanelMetrics row;
   std::string json;
 };
-
-void Run(Job* job, const Options& o, const panel::PanelParams& params,
-         const io::Manifest* manifest, const std::map<std::string, std::array<double, 4>>& boxes) {
-  records::PanelMetrics& m = job->row;
-  const std::string name = io::BaseName(job->path);
-  m.bag = name;
-  panel::ExtractResult r;
-  camera::Intrinsics in;
-  try {
-    const io::ManifestRow* truth = manifest ? manifest->Find(job->path) : nullptr;
-    if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
-    if (truth) {
-      m.distance_m = truth->distance_m;
-      m.angle_deg = truth->angle_deg;
-      m.light = truth->light;
-    }
-    std::optional<panel::PixelBox> box;
-    if (o.mode == "box") {
-      const auto b = boxes.find(name);
-      if (b == boxes.end()) throw std::runtime_error("no box for it in " + o.boxes);
-      box = panel::PixelBox{b->second[0], b->second[1], b->second[2], b->second[3]};
-    }
-    BagSource source(job->path);
-    const io::BagInfo& info = source.info();
-    if (!info.has_depth_intrinsics) throw std::runtime_error("no depth intrinsics recorded");
-    in = info.depth_intrinsics;
-    panel::SearchWindow window;
-    if (truth) window = {truth->distance_m, truth->angle_deg};
-    const auto preset = info.options.find("Visual_Preset");
-    const auto emitter = info.options.find("Emitter_Enabled");
-    if (preset != info.options.end()) m.preset = camera::PresetName(preset->second);
-    if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
-    panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
-    r = panel::ExtractPanel(ahead, in, params, window, box);
-    if (truth && truth->preset) m.preset = *truth->preset;
-    if (truth && truth->emitter) m.emitter = *truth->emitter;
-    const records::PanelMetrics known = m;  // what the manifest and the bag say
-    m = r.metrics;
-    m.bag = known.bag;
-    m.light = known.light;
-    m.preset = known.preset;
-    m.emitter = known.emitter;
-    m.distance_m = known.distance_m;
-    m.angle_deg = known.angle_deg;
-  } catch (const std::exception& e) {
-    const std::string what = e.what();
-    m.status = "error";
-    m.message = what.rfind(job->path, 0) == 0 ? what : job->path + ": " + what;
-  }
-  r.metrics = m;
-  job->json = panel::DetectionJson(r, in, "\"bag\": \"" + name + "\"");
-}
 
 }  // namespace
 
@@ -168,7 +99,21 @@ int main(int argc, char** argv) {
   std::size_t done = 0;
   std::mutex print;
   common::ForEachIndex(jobs.size(), o.jobs, [&](std::size_t k) {
-    Run(&jobs[k], o, params, manifest.get(), boxes);
+    std::optional<panel::PixelBox> box;
+    if (o.mode == "box") {
+      const auto b = boxes.find(io::BaseName(jobs[k].path));
+      if (b != boxes.end()) box = panel::PixelBox{b->second[0], b->second[1], b->second[2], b->second[3]};
+    }
+    pipeline::RecordingResult r;
+    if (o.mode == "box" && !box) {
+      r.row.bag = io::BaseName(jobs[k].path);
+      r.row.status = "error";
+      r.row.message = jobs[k].path + ": no box for it in " + o.boxes;
+    } else {
+      r = pipeline::ExtractRecording(jobs[k].path, params, manifest.get(), box);
+    }
+    jobs[k].row = r.row;
+    jobs[k].json = r.detection_json;
     std::lock_guard<std::mutex> lock(print);
     ++done;
     if (!jobs[k].row.ok())

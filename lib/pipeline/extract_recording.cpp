@@ -1,0 +1,61 @@
+#include "pipeline/extract_recording.h"
+
+#include <stdexcept>
+
+#include "camera/presets.h"
+#include "io/atomic_file.h"
+#include "io/bag_source.h"
+#include "panel/prefetch.h"
+
+namespace depthbias::pipeline {
+
+RecordingResult ExtractRecording(const std::string& path, const panel::PanelParams& params,
+                                 const io::Manifest* manifest,
+                                 const std::optional<panel::PixelBox>& box) {
+  RecordingResult out;
+  records::PanelMetrics& m = out.row;
+  const std::string name = io::BaseName(path);
+  m.bag = name;
+  panel::ExtractResult r;
+  camera::Intrinsics in;
+  try {
+    const io::ManifestRow* truth = manifest ? manifest->Find(path) : nullptr;
+    if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
+    if (truth) {
+      m.distance_m = truth->distance_m;
+      m.angle_deg = truth->angle_deg;
+      m.light = truth->light;
+    }
+    io::BagSource source(path);
+    const io::BagInfo& info = source.info();
+    if (!info.has_depth_intrinsics) throw std::runtime_error("no depth intrinsics recorded");
+    in = info.depth_intrinsics;
+    panel::SearchWindow window;
+    if (truth) window = {truth->distance_m, truth->angle_deg};
+    const auto preset = info.options.find("Visual_Preset");
+    const auto emitter = info.options.find("Emitter_Enabled");
+    if (preset != info.options.end()) m.preset = camera::PresetName(preset->second);
+    if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
+    if (truth && truth->preset) m.preset = *truth->preset;
+    if (truth && truth->emitter) m.emitter = *truth->emitter;
+    panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
+    r = panel::ExtractPanel(ahead, in, params, window, box);
+    const records::PanelMetrics known = m;  // what the manifest and the bag say
+    m = r.metrics;
+    m.bag = known.bag;
+    m.light = known.light;
+    m.preset = known.preset;
+    m.emitter = known.emitter;
+    m.distance_m = known.distance_m;
+    m.angle_deg = known.angle_deg;
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    m.status = "error";
+    m.message = what.rfind(path, 0) == 0 ? what : path + ": " + what;
+  }
+  r.metrics = m;
+  out.detection_json = panel::DetectionJson(r, in, "\"bag\": \"" + name + "\"");
+  return out;
+}
+
+}  // namespace depthbias::pipeline
