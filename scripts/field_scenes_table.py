@@ -9,9 +9,11 @@ person, post or grass), and which hazards the scene adds. An asterisk marks a fi
 the tolerances that tests/panel/field_scenes_test.cpp holds it to (tilt: 2 deg, or 3.5 standard
 errors of a plane fitted to the panel's own valid samples where those cannot give 2 deg).
 
-Usage: field_scenes_table.py BAGS_DIR METRICS_CSV
+Usage: field_scenes_table.py BAGS_DIR METRICS_CSV [PANELS_JSON]
   BAGS_DIR     the folder make_field_bags.py wrote (its *.truth.json)
   METRICS_CSV  panel_extract --out of a run over those bags (with or without --manifest)
+  PANELS_JSON  the same run's --panels-out: "found right" then judges the detection's centre
+               (center_m), as the test does, instead of the measured direction in METRICS_CSV
 """
 import argparse
 import csv
@@ -28,13 +30,21 @@ def number(row, key):
         return float("nan")
 
 
-def centre_on_panel(row, t):
-    """The pixel the measured centre's direction points at lies in the panel's footprint."""
-    az, el = math.radians(number(row, "azimuth_deg")), math.radians(number(row, "elevation_deg"))
-    if not (math.isfinite(az) and math.isfinite(el)):
-        return False
-    u = t["ppx"] + t["fx"] * math.tan(az)
-    v = t["ppy"] - t["fy"] * math.tan(el) / math.cos(az)
+def centre_on_panel(row, panel, t):
+    """The pixel under the detection's centre (panel: its panels.json entry) or, without one,
+    the pixel the measured centre's direction points at, lies in the panel's footprint."""
+    if panel is not None:
+        c = panel.get("center_m")
+        if not c or not c[2] > 0:
+            return False
+        u, v = t["ppx"] + t["fx"] * c[0] / c[2], t["ppy"] + t["fy"] * c[1] / c[2]
+    else:
+        az = math.radians(number(row, "azimuth_deg"))
+        el = math.radians(number(row, "elevation_deg"))
+        if not (math.isfinite(az) and math.isfinite(el)):
+            return False
+        u = t["ppx"] + t["fx"] * math.tan(az)
+        v = t["ppy"] - t["fy"] * math.tan(el) / math.cos(az)
     u, v = math.floor(u), math.floor(v)
     return any(r[0] == v and r[1] <= u < r[2] for r in t["footprint_runs"])
 
@@ -43,7 +53,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("bags")
     ap.add_argument("metrics")
+    ap.add_argument("panels", nargs="?")
     args = ap.parse_args()
+    panels = None
+    if args.panels:
+        with open(args.panels) as f:
+            panels = {p["bag"]: p for p in json.load(f)}
     with open(args.metrics, newline="") as f:
         rows = list(csv.DictReader(f))
     table = []
@@ -73,7 +88,8 @@ def main():
         e_az = number(row, "azimuth_deg") - t["azimuth_deg"]
         tilt = number(row, "normal_tilt_deg")
         height, width = number(row, "panel_height_m"), number(row, "panel_width_m")
-        found = ok and centre_on_panel(row, t)
+        found = ok and centre_on_panel(row, None if panels is None else
+                                       panels.get(row["bag"], {}), t)
         checks = [abs(e_med) <= tol_m, abs(e_hole) <= 1.0, abs(e_az) <= 0.5,
                   abs(tilt - t["normal_tilt_deg"]) <= tol_tilt, abs(height - 1.0) <= 0.1,
                   abs(width - 1.0) <= 0.1]

@@ -124,12 +124,15 @@ double TiltToleranceDeg(const YAML::Node& t) {
   return std::max(2.0, 3.5 * t["tilt_sigma_deg"].as<double>());
 }
 
-// The pixel the measured panel centre's direction points at (azimuth = atan2(x, z), elevation
-// = atan2(−y, hypot(x, z)), DESIGN.md's camera frame).
-long CentrePixel(const records::PanelMetrics& m, const YAML::Node& t) {
-  const double az = m.azimuth_deg * M_PI / 180, el = m.elevation_deg * M_PI / 180;
-  const double u = t["ppx"].as<double>() + t["fx"].as<double>() * std::tan(az);
-  const double v = t["ppy"].as<double>() - t["fy"].as<double>() * std::tan(el) / std::cos(az);
+// The pixel under the detected panel's centre (panels.json center_m, camera frame), −1 if the
+// detection has none.
+long CentrePixel(const YAML::Node& panel, const YAML::Node& t) {
+  const YAML::Node c = panel["center_m"];
+  if (!c || c.size() != 3) return -1;
+  const double x = c[0].as<double>(), y = c[1].as<double>(), z = c[2].as<double>();
+  if (!(z > 0)) return -1;
+  const double u = t["ppx"].as<double>() + t["fx"].as<double>() * x / z;
+  const double v = t["ppy"].as<double>() + t["fy"].as<double>() * y / z;
   if (!std::isfinite(u) || !std::isfinite(v)) return -1;
   return static_cast<long>(std::floor(v)) * 4096 + static_cast<long>(std::floor(u));
 }
@@ -217,13 +220,12 @@ class FieldScene : public ::testing::TestWithParam<std::string> {
                 GetParam().c_str(), run.name.c_str(), d_median, tol_median, d_hole, d_az, d_tilt,
                 tol_tilt, d_w, d_h, where.c_str());
 
-    // Found: the measured centre's direction falls on the panel, not on the bush or the person
-    // (or the post and grass below the panel).
-    EXPECT_TRUE(footprint.count(CentrePixel(*m, t)))
-        << "the panel was not found: measured centre at azimuth " << m->azimuth_deg
-        << " deg, elevation " << m->elevation_deg << " deg, the panel's at "
-        << t["azimuth_deg"].as<double>() << ", " << t["elevation_deg"].as<double>()
-        << "; region: " << where;
+    // Found: the detected panel's centre lies on the panel, not on the bush or the person (or
+    // the post and grass below the panel).
+    EXPECT_TRUE(footprint.count(CentrePixel(panel, t)))
+        << "the panel was not found: the detection's centre is not on it (the panel's centre at "
+        << t["azimuth_deg"].as<double>() << " deg azimuth, " << t["elevation_deg"].as<double>()
+        << " deg elevation); region: " << where;
     EXPECT_LE(std::fabs(d_median), tol_median)
         << "median " << m->median_m << " m, truth " << z << " m; region: " << where;
     EXPECT_LE(std::fabs(d_hole), 1.0) << "hole rate " << m->hole_rate_pct << " %, truth "
