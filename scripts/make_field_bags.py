@@ -63,7 +63,7 @@ HEDGE_DISTANCE_M = 40.0     # horizontal distance of the hedge (a vertical surfa
 HEDGE_HEIGHT_M = 2.5
 HEDGE_ROUGH_M = 0.2
 BUSH = dict(width_m=0.8, height_m=1.2, depth_m=0.6, range_m=6.0, bulge_m=0.12, rough_m=0.04)
-PERSON = dict(width_m=0.5, depth_m=0.3, height_m=1.75, gap_m=0.2, bulge_m=0.06, rough_m=0.015)
+PERSON = dict(width_m=0.5, depth_m=0.3, height_m=1.75, bulge_m=0.06, rough_m=0.015)
 # Hole probability per surface and preset (HD's panel rate rises with distance, see panel_holes).
 HOLES = {"HA": dict(grass=0.20, hedge=0.25, bush=0.08, person=0.15, post=0.5, edge=0.6),
          "HD": dict(grass=0.10, hedge=0.15, bush=0.04, person=0.08, post=0.3, edge=0.4)}
@@ -83,6 +83,7 @@ class Scene:
     roll_deg: float = 0.0
     bush_deg: float = None     # azimuth of the bush (None: no bush)
     person: int = 0            # person beside the panel: -1 left, +1 right, 0 none
+    person_gap_m: float = 0.2  # between the panel's edge and the person (0.05: holding it)
     panel_holes: float = None  # None: 0.97 (HA, 0.98 from 12 m) or HD_PANEL_HOLES
     sigma_px: float = 0.08     # disparity noise
     frames: int = 10
@@ -111,13 +112,15 @@ def scenes():
     ha(12, 10, yaw_deg=2.0, bush_deg=22, light="sunset")
     ha(12, 20, yaw_deg=3.0, bush_deg=-12, compress=False, hazards=["uncompressed"])
     ha(12, 35, yaw_deg=1.5, bush_deg=10, pitch_deg=0.0, hazards=["level"])
-    ha(16, 0, yaw_deg=2.0, bush_deg=12, person=-1, hazards=["person"])
+    ha(16, 0, yaw_deg=2.0, bush_deg=12, person=-1, person_gap_m=0.05,
+       hazards=["person holding"])
     ha(16, 10, yaw_deg=3.0, bush_deg=-12, pitch_deg=0.0, light="sunset", hazards=["level"])
     ha(16, 20, yaw_deg=1.0, bush_deg=6, roll_deg=3.0, hazards=["roll"])
     ha(16, 35, yaw_deg=2.5, bush_deg=14, intrinsics=REAL_INTRINSICS, hazards=["intrinsics"])
     # High Density at 4 m and 16 m, and two points between.
     hd(4, 0, yaw_deg=2.0, bush_deg=-12, emitter=0)
-    hd(4, 10, yaw_deg=0.5, bush_deg=-14, person=1, hazards=["person"])
+    hd(4, 10, yaw_deg=0.5, bush_deg=-14, person=1, person_gap_m=0.05,
+       hazards=["person holding"])
     hd(4, 20, yaw_deg=3.0, bush_deg=-10, depth_units_m=0.0001, light="sunset",
        hazards=["100 um units"])
     hd(4, 35, yaw_deg=1.5, bush_deg=8, pitch_deg=0.0, compress=False,
@@ -328,7 +331,7 @@ def build(sc, rng):
               BUSH["depth_m"], BUSH["height_m"], facing, BUSH["bulge_m"], BUSH["rough_m"],
               LABELS["bush"])
     if sc.person:
-        off = sc.person * (PANEL_SIZE_M / 2 + PERSON["gap_m"] + PERSON["width_m"] / 2)
+        off = sc.person * (PANEL_SIZE_M / 2 + sc.person_gap_m + PERSON["width_m"] / 2)
         p = center + off * aw
         base = on_grass(p[0], p[2])
         normal = np.cross(aw, up)  # the panel's normal, towards the camera
@@ -427,7 +430,8 @@ def make(out, sc, frames):
         baseline_m=BASELINE_M, depth_units_m=sc.depth_units_m, noise_px=sc.sigma_px,
         camera_height_m=CAMERA_HEIGHT_M, panel_bottom_above_grass_m=PANEL_BOTTOM_M,
         post_width_m=POST_WIDTH_M, hedge_distance_m=HEDGE_DISTANCE_M, bush=BUSH if
-        sc.bush_deg is not None else None, person=PERSON if sc.person else None,
+        sc.bush_deg is not None else None,
+        person=dict(PERSON, gap_m=sc.person_gap_m, side=sc.person) if sc.person else None,
         hole_rates=dict(HOLES[sc.preset], panel=panel_holes(sc)),
         true_median_depth_m=median_m,
         true_hole_rate_pct=100.0 * holes["inner"] / (inner_idx.size * frames),
