@@ -27,7 +27,8 @@ import sys
 import time
 
 import numpy as np
-import pyrealsense2 as rs
+
+import rs_record
 
 W, H, FX, PPX, PPY = 1280, 720, 640.0, 640.0, 360.0
 BASELINE_M = 0.095
@@ -141,47 +142,6 @@ def inner_box(mask, margin=1):
     return [u0, int(top + margin), u1, int(bottom - margin)]
 
 
-def record(path, frames_fn, n, preset, emitter, compress):
-    dev = rs.software_device()
-    dev.register_info(rs.camera_info.name, "Intel RealSense D455")
-    dev.register_info(rs.camera_info.serial_number, "000000000455")
-    dev.register_info(rs.camera_info.firmware_version, "5.16.0.1")
-    depth = dev.add_sensor("Stereo Module")
-    it = rs.intrinsics()
-    it.width, it.height, it.fx, it.fy, it.ppx, it.ppy = W, H, FX, FX, PPX, PPY
-    it.model, it.coeffs = rs.distortion.brown_conrady, [0.0] * 5
-    vs = rs.video_stream()
-    vs.type, vs.index, vs.uid = rs.stream.depth, 0, 0
-    vs.width, vs.height, vs.fps, vs.bpp, vs.fmt = W, H, 30, 2, rs.format.z16
-    vs.intrinsics = it
-    prof = depth.add_video_stream(vs, True)
-    depth.add_read_only_option(rs.option.depth_units, 0.001)
-    depth.add_read_only_option(rs.option.visual_preset, preset)
-    depth.add_read_only_option(rs.option.emitter_enabled, emitter)
-    depth.add_read_only_option(rs.option.stereo_baseline, BASELINE_M * 1000)
-    rec = rs.recorder(path, dev, compress)
-    depth.open(prof)
-    depth.start(lambda f: None)
-    keep = []
-    for i in range(n):
-        img = frames_fn(i)
-        f = rs.software_video_frame()
-        f.pixels, f.stride, f.bpp = img, 2 * W, 2
-        f.timestamp, f.frame_number = 1.0e6 + 1000.0 / 30 * i, i + 1
-        f.domain = rs.timestamp_domain.hardware_clock
-        f.depth_units = 0.001
-        f.profile = prof.as_video_stream_profile()
-        keep.append(img)
-        depth.on_video_frame(f)
-        if len(keep) > 8:
-            time.sleep(0.002)
-            keep.pop(0)
-    time.sleep(0.3)
-    depth.stop()
-    depth.close()
-    del rec
-
-
 def make(out, name, distance_m, angle_deg, hole_rate, frames, clutter, compress, seed):
     panel, z, footprint = scene(distance_m, angle_deg, clutter)
     rng = np.random.default_rng(seed)
@@ -197,7 +157,8 @@ def make(out, name, distance_m, angle_deg, hole_rate, frames, clutter, compress,
     path = os.path.join(out, name + ".bag")
     if os.path.exists(path):
         os.remove(path)
-    record(path, frame, frames, preset, emitter, compress)
+    camera = rs_record.Camera(W, H, FX, FX, PPX, PPY, 0.001, BASELINE_M)
+    rs_record.record(path, frame, frames, camera, preset, emitter, compress)
     c = panel.c
     mask = footprint.reshape(H, W)
     truth = dict(
@@ -236,7 +197,8 @@ def main():
     jobs.append(("clutter_08m_20deg", 8, 20, 0.30, True, seed))
     jobs.append(("clutter_12m_00deg", 12, 0, 0.50, True, seed + 1))
     manifest, boxes = ["bag,distance_m,angle_deg,light"], {}
-    script_time = os.path.getmtime(os.path.abspath(__file__))
+    script_time = max(os.path.getmtime(os.path.abspath(__file__)),
+                      os.path.getmtime(os.path.abspath(rs_record.__file__)))
     for name, d, a, hole, clutter, s in jobs:
         if args.only and args.only != name:
             continue

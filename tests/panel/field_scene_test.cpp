@@ -95,9 +95,9 @@ struct Case {
   bool with_window;
 };
 
-class FieldScenes : public ::testing::TestWithParam<Case> {};
+class FieldInMemory : public ::testing::TestWithParam<Case> {};
 
-TEST_P(FieldScenes, FoundAndMeasuredWithinTolerance) {
+TEST_P(FieldInMemory, FoundAndMeasuredWithinTolerance) {
   const Case& c = GetParam();
   const FieldScene scene(c.spec);
   FieldSource source(&scene);
@@ -143,7 +143,7 @@ std::vector<Case> Cases() {
   return out;
 }
 
-INSTANTIATE_TEST_SUITE_P(Field, FieldScenes, ::testing::ValuesIn(Cases()),
+INSTANTIATE_TEST_SUITE_P(Scenes, FieldInMemory, ::testing::ValuesIn(Cases()),
                          [](const ::testing::TestParamInfo<Case>& info) {
                            return info.param.spec.name +
                                   (info.param.with_window ? "_manifest" : "_free");
