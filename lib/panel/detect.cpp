@@ -305,9 +305,10 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
       } else if (cand.see_through > p.max_see_through) {
         cand.rejected = "the background shows through " + common::Text(100 * cand.see_through) +
                         " % of it: not a solid panel";
-      } else if (cand.ring_share > p.max_ring_share) {
+      } else if (ev.occupied_sides >= 3 || cand.ring_share > p.max_ring_share) {
         cand.rejected = "the plane continues around it (" + common::Text(100 * cand.ring_share) +
-                        " %): part of a larger surface";
+                        " % of a ring, " + std::to_string(ev.occupied_sides) +
+                        " sides): part of a larger surface";
       } else if (cand.facing_deg > p.max_facing_angle_deg) {
         cand.rejected = "does not face the camera";
       }

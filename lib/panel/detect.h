@@ -57,6 +57,9 @@ struct WindowEvidence {
   int in_front = 0;       // observed pixels in front of the plane inside the window
   int ring_on_plane = 0;  // observed pixels on the plane in a ring around the window
   int ring_observed = 0;  // observed pixels (any class) in that ring
+  // Sides of the ring (left, right, below, above) where most observed pixels lie on the plane:
+  // a person holding the panel or a stand takes one or two, a wall or a hedge three or four.
+  int occupied_sides = 0;
   int cut_off_px = 0;     // on-plane pixels of the searched area outside the window
   double cut_off_below_m = 0, cut_off_above_m = 0;  // how far they reach beyond its edges
   double cut_off_left_m = 0, cut_off_right_m = 0;

@@ -169,6 +169,7 @@ std::string EvidenceJson(const WindowEvidence& e) {
   j << "\"evidence\": {\"on_plane\": " << e.on_plane << ", \"behind\": " << e.behind
     << ", \"ground\": " << e.ground << ", \"in_front\": " << e.in_front
     << ", \"ring_on_plane\": " << e.ring_on_plane << ", \"ring_observed\": " << e.ring_observed
+    << ", \"occupied_sides\": " << e.occupied_sides
     << ", \"covered_width_m\": " << Num(e.covered_width_m)
     << ", \"covered_height_m\": " << Num(e.covered_height_m)
     << ", \"cut_off\": {\"pixels\": " << e.cut_off_px << ", \"below_m\": " << Num(e.cut_off_below_m)

@@ -142,23 +142,85 @@ WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& 
     }
   }
 
-  EvidenceGrid grid(ns, nt);
+  // grid: the observed pixels, by class. area: the same with the holes enclosed by observed
+  // pixels (within kFillPx on both sides along a row or a column) taking the class of the nearest
+  // one, so that each surface counts by the area it covers, not by how many samples its texture
+  // gave: a dense person beside a hole-ridden panel does not outweigh it.
+  EvidenceGrid grid(ns, nt), area_grid(ns, nt);
   std::vector<Observed> observed;
+  const int bw = u1 - u0 + 1, bh = v1 - v0 + 1;
+  std::vector<int> cell_of(static_cast<std::size_t>(bw) * bh, -1);
+  std::vector<std::uint8_t> label(cell_of.size(), 0);  // 0: none, else class + 1
   Eigen::Vector2d st;
   for (int v = v0; v <= v1; ++v) {
     for (int u = u0; u <= u1; ++u) {
       const std::uint32_t i = static_cast<std::uint32_t>(v) * in.width + u;
-      if (acc.Count(i) == 0) continue;
       if (!area.PlaneCoordinates(rays.Ray(i), &st)) continue;
       const int ci = static_cast<int>(std::floor((st.x() + half_s) / cell_m));
       const int cj = static_cast<int>(std::floor((st.y() + half_t) / cell_m));
       if (ci < 0 || cj < 0 || ci >= ns || cj >= nt) continue;
+      const std::size_t b = static_cast<std::size_t>(v - v0) * bw + (u - u0);
+      cell_of[b] = cj * ns + ci;
+      if (acc.Count(i) == 0) continue;
       const PixelClass cls = ClassifyPixel(rays, acc, i, plane, ground, p);
       grid.Add(ci, cj, cls);
       observed.push_back({i, ci, cj, cls});
+      label[b] = static_cast<std::uint8_t>(cls) + 1;
     }
   }
   grid.Integrate();
+  {
+    constexpr int kFillPx = 8;
+    constexpr std::int16_t kFar = 1000;
+    // Distance to and label of the nearest labelled pixel in each of four directions.
+    std::vector<std::int16_t> dist[4];
+    std::vector<std::uint8_t> near[4];
+    for (int k = 0; k < 4; ++k) {
+      dist[k].assign(label.size(), kFar);
+      near[k].assign(label.size(), 0);
+    }
+    auto scan = [&](int k, std::size_t start, std::ptrdiff_t step, int count) {
+      std::int16_t d = kFar;
+      std::uint8_t l = 0;
+      std::size_t b = start;
+      for (int n = 0; n < count; ++n, b += step) {
+        if (label[b]) {
+          d = 0;
+          l = label[b];
+        } else if (d < kFar) {
+          ++d;
+        }
+        dist[k][b] = d;
+        near[k][b] = l;
+      }
+    };
+    for (int y = 0; y < bh; ++y) {
+      scan(0, static_cast<std::size_t>(y) * bw, 1, bw);             // from the left
+      scan(1, static_cast<std::size_t>(y) * bw + bw - 1, -1, bw);   // from the right
+    }
+    for (int x = 0; x < bw; ++x) {
+      scan(2, x, bw, bh);                                            // from above
+      scan(3, static_cast<std::size_t>(bh - 1) * bw + x, -static_cast<std::ptrdiff_t>(bw), bh);
+    }
+    for (std::size_t b = 0; b < label.size(); ++b) {
+      if (cell_of[b] < 0) continue;
+      std::uint8_t l = label[b];
+      if (!l) {
+        int best = kFar;
+        for (int axis = 0; axis < 2; ++axis) {
+          const int a = 2 * axis, c = a + 1;
+          if (dist[a][b] > kFillPx || dist[c][b] > kFillPx) continue;
+          const int k = dist[a][b] <= dist[c][b] ? a : c;
+          if (dist[k][b] < best) {
+            best = dist[k][b];
+            l = near[k][b];
+          }
+        }
+      }
+      if (l) area_grid.Add(cell_of[b] % ns, cell_of[b] / ns, static_cast<PixelClass>(l - 1));
+    }
+  }
+  area_grid.Integrate();
 
   // The window of the panel's size with the best evidence.
   // The ring starts one pixel footprint beyond the window: pixels straddling the edge are not
@@ -173,35 +235,54 @@ WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& 
     fit.message = "searched area smaller than the panel";
     return fit;
   }
-  auto score_at = [&](int i, int j) {
-    return grid.Box(i, j, i + ws, j + wt, EvidenceGrid::kOn) -
-           p.see_through_weight * grid.Box(i, j, i + ws, j + wt, EvidenceGrid::kNegative) -
-           p.front_weight * grid.Box(i, j, i + ws, j + wt, EvidenceGrid::kFront);
+  // The band one pixel wide just outside the window's sides and top must not run through the
+  // plane: the panel's edges lie where its plane ends (background, holes, a gap), not through a
+  // person beside it, however densely observed. Below, a post or stand may carry on.
+  // Two scores of a window: by the area each class covers (where the panel is), then by the
+  // observed pixels themselves (exactly where its edges run, to a fraction of a pixel).
+  auto score_with = [&](const EvidenceGrid& g, int i, int j) {
+    // The band lies one pixel out: a column straddling the panel's very edge is not held
+    // against it.
+    const long on_band = grid.Box(i - 2 * kGuard, j, i + ws + 2 * kGuard, j + wt + 2 * kGuard,
+                                  EvidenceGrid::kOn) -
+                         grid.Box(i - kGuard, j, i + ws + kGuard, j + wt + kGuard,
+                                  EvidenceGrid::kOn);
+    return g.Box(i, j, i + ws, j + wt, EvidenceGrid::kOn) -
+           p.see_through_weight * g.Box(i, j, i + ws, j + wt, EvidenceGrid::kNegative) -
+           p.front_weight * g.Box(i, j, i + ws, j + wt, EvidenceGrid::kFront) -
+           p.edge_weight * on_band;
   };
-  double best = -std::numeric_limits<double>::infinity();
-  int bi = ring, bj = ring;
-  for (int j = ring; j + wt + ring <= nt; ++j) {
-    for (int i = ring; i + ws + ring <= ns; ++i) {
-      const double score = score_at(i, j);
-      if (score > best) {
-        best = score;
-        bi = i;
-        bj = j;
+  auto best_in = [&](const EvidenceGrid& g, int i0, int i1, int j0, int j1, int* bi, int* bj) {
+    i0 = std::max(i0, ring);
+    j0 = std::max(j0, ring);
+    i1 = std::min(i1, ns - ws - ring);
+    j1 = std::min(j1, nt - wt - ring);
+    double best = -std::numeric_limits<double>::infinity();
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) {
+        const double score = score_with(g, i, j);
+        if (score > best) {
+          best = score;
+          *bi = i;
+          *bj = j;
+        }
       }
     }
-  }
-  // Where nothing observed bounds the panel (holes around it), windows tie over a range of
-  // positions: take the middle of the run of ties through the best one, along each axis.
-  {
-    int lo = bi, hi = bi;
-    while (lo - 1 >= ring && score_at(lo - 1, bj) >= best) --lo;
-    while (hi + 1 + ws + ring <= ns && score_at(hi + 1, bj) >= best) ++hi;
-    bi = (lo + hi) / 2;
-    lo = hi = bj;
-    while (lo - 1 >= ring && score_at(bi, lo - 1) >= best) --lo;
-    while (hi + 1 + wt + ring <= nt && score_at(bi, hi + 1) >= best) ++hi;
-    bj = (lo + hi) / 2;
-  }
+    // Where nothing observed bounds the panel (holes around it), windows tie over a range of
+    // positions: take the middle of the run of ties through the best one, along each axis.
+    int lo = *bi, hi = *bi;
+    while (lo - 1 >= i0 && score_with(g, lo - 1, *bj) >= best) --lo;
+    while (hi + 1 <= i1 && score_with(g, hi + 1, *bj) >= best) ++hi;
+    *bi = (lo + hi) / 2;
+    lo = hi = *bj;
+    while (lo - 1 >= j0 && score_with(g, *bi, lo - 1) >= best) --lo;
+    while (hi + 1 <= j1 && score_with(g, *bi, hi + 1) >= best) ++hi;
+    *bj = (lo + hi) / 2;
+  };
+  int bi = ring, bj = ring;
+  best_in(area_grid, ring, ns, ring, nt, &bi, &bj);
+  const int local = 4 * kCellsPerPixel;  // refined within four pixels
+  best_in(grid, bi - local, bi + local, bj - local, bj + local, &bi, &bj);
   WindowEvidence& ev = fit.evidence;
   ev.on_plane = static_cast<int>(grid.Box(bi, bj, bi + ws, bj + wt, EvidenceGrid::kOn));
   if (ev.on_plane < 3) {
@@ -224,6 +305,7 @@ WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& 
 
   double cs_lo = 1e18, cs_hi = -1e18, ct_lo = 1e18, ct_hi = -1e18;
   int ring_all = 0;
+  int side_on[4] = {0, 0, 0, 0}, side_all[4] = {0, 0, 0, 0};  // left, right, below, above
   for (const Observed& o : observed) {
     const bool in_s = o.cell_i >= bi && o.cell_i < bi + ws;
     const bool in_t = o.cell_j >= bj && o.cell_j < bj + wt;
@@ -250,6 +332,14 @@ WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& 
     const bool in_guard = o.cell_i >= bi - kGuard && o.cell_i < bi + ws + kGuard &&
                           o.cell_j >= bj - kGuard && o.cell_j < bj + wt + kGuard;
     ring_all += in_ring && !in_guard;
+    if (in_ring && !in_guard) {
+      const bool side[4] = {o.cell_i < bi - kGuard, o.cell_i >= bi + ws + kGuard,
+                            o.cell_j < bj - kGuard, o.cell_j >= bj + wt + kGuard};
+      for (int k = 0; k < 4; ++k) {
+        side_all[k] += side[k];
+        side_on[k] += side[k] && o.cls == PixelClass::kOnPlane;
+      }
+    }
     if (o.cls != PixelClass::kOnPlane) continue;
     ++ev.cut_off_px;
     if (s < s0) ev.cut_off_left_m = std::max(ev.cut_off_left_m, s0 - s);
@@ -258,6 +348,9 @@ WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& 
     if (t > t1) ev.cut_off_above_m = std::max(ev.cut_off_above_m, t - t1);
   }
   ev.ring_observed = ring_all;
+  constexpr int kMinSidePixels = 5;
+  for (int k = 0; k < 4; ++k)
+    ev.occupied_sides += side_all[k] >= kMinSidePixels && 2 * side_on[k] > side_all[k];
   ev.covered_width_m = cs_hi - cs_lo + cell_m;
   ev.covered_height_m = ct_hi - ct_lo + cell_m;
   std::sort(fit.on_plane_pixels.begin(), fit.on_plane_pixels.end());

@@ -75,6 +75,7 @@ const std::map<std::string, Setter>& Table() {
       {"evidence_sigma_k", D(&PanelParams::evidence_sigma_k)},
       {"see_through_weight", D(&PanelParams::see_through_weight)},
       {"front_weight", D(&PanelParams::front_weight)},
+      {"edge_weight", D(&PanelParams::edge_weight)},
       {"search_extent", D(&PanelParams::search_extent)},
       {"max_see_through", D(&PanelParams::max_see_through)},
       {"max_ring_share", D(&PanelParams::max_ring_share)},
@@ -128,7 +129,8 @@ bool PanelParams::IsValid(std::string* why) const {
   if (!(max_facing_angle_deg > 0 && max_facing_angle_deg <= 90))
     return fail("max_facing_angle_deg must be in (0, 90]");
   if (refine_iterations < 1) return fail("refine_iterations must be at least 1");
-  if (!(evidence_sigma_k > 0) || !(see_through_weight >= 0) || !(front_weight >= 0))
+  if (!(evidence_sigma_k > 0) || !(see_through_weight >= 0) || !(front_weight >= 0) ||
+      !(edge_weight >= 0))
     return fail("evidence_sigma_k must be positive, the window weights not negative");
   if (!(search_extent >= 0.25 && search_extent <= 5))
     return fail("search_extent must be in [0.25, 5] panel sizes");

@@ -65,14 +65,17 @@ struct PanelParams {
   double evidence_sigma_k = 4.0;
   double see_through_weight = 2.0;
   double front_weight = 0.5;
+  // per on-plane pixel in the one-pixel band just outside the window's sides and top
+  double edge_weight = 20.0;
   double search_extent = 0.75;
   // A panel is solid and stands free: a candidate is refused when more than max_see_through of
-  // its window's observed pixels show the background or the ground, when more than
-  // max_ring_share of a ring ring_width_frac·size wide around the window lies on its plane (a
-  // wall, a hedge), or when the plane's pixels cover less than min_coverage of its width or
+  // its window's observed pixels show the background or the ground, when the plane continues on
+  // three or four sides of a ring ring_width_frac·size wide around the window or over more than
+  // max_ring_share of it (a wall, a hedge; a person holding the panel or its stand take one or
+  // two sides), or when the plane's pixels cover less than min_coverage of its width or
   // height (a smaller object).
   double max_see_through = 0.25;
-  double max_ring_share = 0.25;
+  double max_ring_share = 0.6;
   double ring_width_frac = 0.15;
   double min_coverage = 0.6;
 

@@ -118,9 +118,10 @@ TEST_P(FieldInMemory, FoundAndMeasuredWithinTolerance) {
   EXPECT_NEAR(m.median_m, z, step_m + 0.001 * z);
   EXPECT_NEAR(m.hole_rate_pct, scene.true_hole_rate_pct, 1.0);
   EXPECT_NEAR(m.azimuth_deg, scene.true_azimuth_deg, 0.5);
-  // Tilt within 2°, or within three of its own standard errors where the recording cannot resolve
-  // 2° (far panels with 97–99 % holes: a few hundred samples carry the slope).
-  const double tilt_tol_deg = std::max(2.0, 3.0 * r.measure.tilt_sigma_deg);
+  // Tilt within 2°, or within four of its own standard errors where the recording cannot resolve
+  // 2° (far panels with 97–99 % holes: a few hundred samples carry the slope; with 80 samples
+  // the linearized σ understates the spread of the tilt's magnitude).
+  const double tilt_tol_deg = std::max(2.0, 4.0 * r.measure.tilt_sigma_deg);
   EXPECT_NEAR(m.normal_tilt_deg, scene.true_tilt_deg, tilt_tol_deg);
   EXPECT_NEAR(m.panel_height_m, 1.0, 0.1);
   EXPECT_NEAR(m.panel_width_m, 1.0, 0.1);
