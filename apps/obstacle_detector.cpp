@@ -79,7 +79,8 @@ int main(int argc, char** argv) {
     };
     const std::string preset = camera::PresetName(option("Visual_Preset"));
     const std::string emitter = option("Emitter_Enabled") != 0 ? "on" : "off";
-    if (const auto b = info.options.find("Stereo_Baseline"); b != info.options.end() && b->second > 0)
+    const auto b = info.options.find("Stereo_Baseline");
+    if (b != info.options.end() && b->second > 0)
       params.baseline_m = b->second / 1000.0;  // recorded in millimetres
     const model::ScenarioModel* scenario = nullptr;
     try {
@@ -89,7 +90,8 @@ int main(int argc, char** argv) {
     }
     if (!scenario->has_margin())
       throw Fail(weights_path + ": schema " + bias_model.weights().schema +
-                 " holds no range-dependent margin (one sigma at every range); refit with fit_bias");
+                 " holds no range-dependent margin (one sigma at every range); "
+                 "refit with fit_bias");
 
     detect::ObstacleDetector detector(info.depth_intrinsics, params, *scenario);
     const auto start = std::chrono::steady_clock::now();
@@ -103,7 +105,8 @@ int main(int argc, char** argv) {
       lines += detect::FormatJsonLine(d);
     }
     io::WriteFileAtomic(out, lines);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("obstacle_detector: %llu frames, %llu obstacles (%s/%s/emitter %s, k %g, "
                 "stopping distance %.2f m), %.1f frames/s -> %s\n",
                 static_cast<unsigned long long>(n), static_cast<unsigned long long>(obstacles),

@@ -88,7 +88,8 @@ class VoxelGrid {
       (*centroids)[static_cast<size_t>(v)] += p;
       ++counts_[static_cast<size_t>(v)];
     }
-    for (size_t v = 0; v < centroids->size(); ++v) (*centroids)[v] /= static_cast<float>(counts_[v]);
+    for (size_t v = 0; v < centroids->size(); ++v)
+      (*centroids)[v] /= static_cast<float>(counts_[v]);
   }
 
  private:
@@ -295,7 +296,8 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
   if (!rest.empty()) {
     Cloud::Ptr obstacles(new Cloud);
     obstacles->resize(rest.size());
-    for (size_t j = 0; j < rest.size(); ++j) (*obstacles)[j] = (*cloud)[static_cast<size_t>(rest[j])];
+    for (size_t j = 0; j < rest.size(); ++j)
+      (*obstacles)[j] = (*cloud)[static_cast<size_t>(rest[j])];
     pcl::search::KdTree<pcl::PointXYZ> tree(false);
     tree.setInputCloud(obstacles);
     const double noise = p.cluster.noise_k * p.cluster.disparity_noise_px /
