@@ -3,7 +3,7 @@
 //            [--lambda 0.001] [--loss auto|none|huber|cauchy|soft_l1] [--loss-scale 1.0]
 //            [--group-by light,preset] [--cv point,distance|point|distance|none]
 //            [--weight-valid] [--focal-px 640] [--baseline-m 0.095] [--prior name=mean:strength]
-//            [--nested] [--cv-out heldout.csv]
+//            [--nested] [--cv-out heldout.csv] [--coverage K] [--margins on|off]
 // --nested also judges the choice of a model out of sample: every form × {none, huber} is a
 // candidate, chosen in each outer fold by inner cross-validation on that fold's training rows.
 #include <cmath>
@@ -32,8 +32,11 @@ constexpr char kUsage[] =
     "         [--group-by light,preset] [--cv point,distance|point|distance|none]\n"
     "         [--weight-valid] [--focal-px 640] [--baseline-m 0.095]\n"
     "         [--prior name=mean:strength] [--nested] [--cv-out heldout.csv]\n"
+    "         [--coverage K] [--margins on|off]\n"
     "Fits the bias model per (light, preset) with Ceres and an L2 prior, cross-validated;\n"
-    "writes the weights YAML and prints a table. --nested also judges the choice of model.\n";
+    "writes the weights YAML and prints a table. --nested also judges the choice of model.\n"
+    "--coverage K prints, per distance, the share of held-out truths below corrected - K*sigma.\n"
+    "--margins off: no residual model, no weighting, no near guard (one sigma per scenario).\n";
 
 std::vector<std::string> Split(const std::string& s) {
   std::vector<std::string> out;
@@ -54,6 +57,7 @@ int Fail(const std::string& what) {
 int main(int argc, char** argv) {
   std::string in, out, cv_out;
   bool nested = false;
+  double coverage_k = -1.0;
   model::FitGroupsParams params;
   try {
     for (apps::Args args(argc, argv); args.Next();) {
@@ -74,6 +78,12 @@ int main(int argc, char** argv) {
       else if (a == "--cv-out") cv_out = value();
       else if (a == "--weight-valid") params.fit.weight_by_valid_pixels = true;
       else if (a == "--nested") nested = true;
+      else if (a == "--coverage") coverage_k = args.Number(false, 0);
+      else if (a == "--margins") {
+        const std::string v = value();
+        if (v != "on" && v != "off") throw std::invalid_argument("--margins " + v + " (on|off)");
+        params.fit.margins.enabled = v == "on";
+      }
       else if (a == "--group-by") params.group_by = Split(value());
       else if (a == "--loss") {
         const std::string v = value();
@@ -140,12 +150,14 @@ int main(int argc, char** argv) {
           cells.push_back({r.bag, g.group.Label(), model::CvSchemeName(cv.scheme),
                            io::CsvNumber(r.distance_m), io::CsvNumber(r.angle_deg), r.emitter,
                            io::CsvNumber(r.median_m - r.distance_m),
-                           io::CsvNumber(i < cv.errors_m.size() ? cv.errors_m[i] : NAN)});
+                           io::CsvNumber(i < cv.errors_m.size() ? cv.errors_m[i] : NAN),
+                           io::CsvNumber(i < cv.std_m.size() ? cv.std_m[i] : NAN)});
         }
       }
     }
     files.push_back({cv_out, io::FormatCsv({"bag", "group", "scheme", "distance_m", "angle_deg",
-                                            "emitter", "bias_m", "heldout_error_m"},
+                                            "emitter", "bias_m", "heldout_error_m",
+                                            "heldout_std_m"},
                                            cells)});
   }
   try {
@@ -154,5 +166,6 @@ int main(int argc, char** argv) {
     return Fail(e.what());
   }
   std::fputs(model::FormatFitTable(report, params).c_str(), stdout);
+  if (coverage_k >= 0) std::fputs(model::FormatCoverageTable(report, coverage_k).c_str(), stdout);
   return 0;
 }

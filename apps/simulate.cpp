@@ -12,6 +12,7 @@
 #include "camera/presets.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
+#include "io/csv.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
 #include "sim/calibrate.h"
@@ -82,6 +83,16 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
   }
   io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
                     {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
+  // Obstacle scenes: where each obstacle's face towards the camera is (the same in every
+  // recording of the protocol).
+  std::vector<std::vector<std::string>> obstacles;
+  for (const sim::ObstaclePose& o : sim::PlaceObstacles(params.protocol.scene))
+    obstacles.push_back({o.obstacle.kind, Fixed(o.face_range_m, 6), Fixed(o.face_azimuth_deg, 4),
+                         Fixed(o.face_center_m.x(), 6), Fixed(o.face_center_m.y(), 6),
+                         Fixed(o.face_center_m.z(), 6)});
+  if (!obstacles.empty())
+    io::WriteCsv((fs::path(dir) / "obstacles.csv").string(),
+                 {"kind", "range_m", "azimuth_deg", "x_m", "y_m", "z_m"}, obstacles);
   std::printf("simulate: %zu recordings of %d frames in %s\n", rows.size(),
               params.protocol.frames, dir.c_str());
 }

@@ -11,7 +11,8 @@
 namespace depthbias::io {
 namespace {
 
-constexpr const char* kSchema = "depthbias.weights/1";
+constexpr const char* kSchema = "depthbias.weights/2";
+constexpr const char* kSchemaV1 = "depthbias.weights/1";  // no margin, no near guard: read only
 
 std::string Num(double v) {
   if (std::isnan(v)) return ".nan";
@@ -46,6 +47,14 @@ class Reader {
       return n.as<int>();
     } catch (const YAML::Exception&) {
       Fail(path, "'" + n.Scalar() + "' is not an integer");
+    }
+  }
+  bool Bool(const YAML::Node& n, const std::string& path) const {
+    if (!n.IsScalar()) Fail(path, "expected true or false");
+    try {
+      return n.as<bool>();
+    } catch (const YAML::Exception&) {
+      Fail(path, "'" + n.Scalar() + "' is not true or false");
     }
   }
   std::string String(const YAML::Node& n, const std::string& path) const {
@@ -98,6 +107,10 @@ std::string FormatWeightsYaml(const records::BiasWeights& w) {
   out << YAML::Key << "focal_px" << YAML::Value << Num(w.focal_px);
   out << YAML::Key << "baseline_m" << YAML::Value << Num(w.baseline_m);
   out << YAML::Key << "group_by" << YAML::Value << YAML::Flow << w.group_by;
+  out << YAML::Key << "near_guard" << YAML::Value << YAML::Flow << YAML::BeginMap
+      << YAML::Key << "near_m" << YAML::Value << Num(w.near_m) << YAML::Key << "full_m"
+      << YAML::Value << Num(w.full_m) << YAML::EndMap;
+  out << YAML::Key << "noise_pooled" << YAML::Value << w.noise_pooled;
   out << YAML::Key << "groups" << YAML::Value << YAML::BeginSeq;
   for (const auto& g : w.groups) {
     out << YAML::BeginMap;
@@ -118,6 +131,12 @@ std::string FormatWeightsYaml(const records::BiasWeights& w) {
     out << YAML::Key << "rmse_m" << YAML::Value << Num(g.rmse_m);
     out << YAML::Key << "mae_m" << YAML::Value << Num(g.mae_m);
     out << YAML::Key << "residual_std_m" << YAML::Value << Num(g.residual_std_m);
+    if (g.margin.known) {
+      out << YAML::Key << "margin" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
+          << "placement_m" << YAML::Value << Num(g.margin.placement_m) << YAML::Key
+          << "noise_per_m" << YAML::Value << Num(g.margin.noise_per_m) << YAML::Key
+          << "weighted" << YAML::Value << g.margin.weighted << YAML::EndMap;
+    }
     auto cv_map = [&out](const records::BiasCrossValidation& cv) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "scheme" << YAML::Value << cv.scheme
           << YAML::Key << "rmse_m" << YAML::Value << Num(cv.rmse_m) << YAML::Key << "mae_m"
@@ -164,15 +183,25 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
                   e.msg + ")");
   }
   if (!root.IsMap()) r.Fail("", "not a depthbias weights file (expected a YAML map)");
-  if (!root["schema"] || !root["schema"].IsScalar() || root["schema"].Scalar() != kSchema) {
+  const std::string schema =
+      root["schema"] && root["schema"].IsScalar() ? root["schema"].Scalar() : "";
+  if (schema != kSchema && schema != kSchemaV1) {
     r.Fail("schema", std::string("not a depthbias weights file (expected schema: ") + kSchema +
-                         ")");
+                         " or " + kSchemaV1 + ")");
   }
-  r.OnlyKeys(root, "",
-             {"schema", "model", "target", "lambda", "loss", "loss_scale_m", "focal_px",
-              "baseline_m", "group_by", "groups", "provenance"});
+  const bool v1 = schema == kSchemaV1;
+  if (v1) {
+    r.OnlyKeys(root, "",
+               {"schema", "model", "target", "lambda", "loss", "loss_scale_m", "focal_px",
+                "baseline_m", "group_by", "groups", "provenance"});
+  } else {
+    r.OnlyKeys(root, "",
+               {"schema", "model", "target", "lambda", "loss", "loss_scale_m", "focal_px",
+                "baseline_m", "group_by", "near_guard", "noise_pooled", "groups",
+                "provenance"});
+  }
   records::BiasWeights w;
-  w.schema = kSchema;
+  w.schema = schema;
   w.model = r.String(r.Need(root, "model", "model"), "model");
   if (root["target"]) w.target = r.String(root["target"], "target");
   w.lambda = r.Double(r.Need(root, "lambda", "lambda"), "lambda");
@@ -187,15 +216,31 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
       w.group_by.push_back(r.String(gb[i], "group_by[" + std::to_string(i) + "]"));
     }
   }
+  if (const YAML::Node ng = root["near_guard"]; ng) {
+    if (!ng.IsMap()) r.Fail("near_guard", "expected a map {near_m, full_m}");
+    r.OnlyKeys(ng, "near_guard", {"near_m", "full_m"});
+    w.near_m = r.Double(r.Need(ng, "near_m", "near_guard.near_m"), "near_guard.near_m");
+    w.full_m = r.Double(r.Need(ng, "full_m", "near_guard.full_m"), "near_guard.full_m");
+    if (!(w.near_m >= 0) || !(w.full_m >= w.near_m)) {
+      r.Fail("near_guard", "need 0 <= near_m <= full_m");
+    }
+  }
+  if (root["noise_pooled"]) w.noise_pooled = r.Bool(root["noise_pooled"], "noise_pooled");
   const YAML::Node groups = r.Need(root, "groups", "groups");
   if (!groups.IsSequence() || groups.size() == 0) r.Fail("groups", "expected a non-empty list");
   for (size_t i = 0; i < groups.size(); ++i) {
     const std::string p = "groups[" + std::to_string(i) + "]";
     const YAML::Node gn = groups[i];
     if (!gn.IsMap()) r.Fail(p, "expected a map");
-    r.OnlyKeys(gn, p,
-               {"light", "preset", "emitter", "n", "weights", "knots_deg", "rmse_m", "mae_m",
-                "residual_std_m", "cv", "cv_more", "covariance"});
+    if (v1) {
+      r.OnlyKeys(gn, p,
+                 {"light", "preset", "emitter", "n", "weights", "knots_deg", "rmse_m", "mae_m",
+                  "residual_std_m", "cv", "cv_more", "covariance"});
+    } else {
+      r.OnlyKeys(gn, p,
+                 {"light", "preset", "emitter", "n", "weights", "knots_deg", "rmse_m", "mae_m",
+                  "residual_std_m", "margin", "cv", "cv_more", "covariance"});
+    }
     records::BiasWeightsGroup g;
     g.light = r.String(r.Need(gn, "light", p + ".light"), p + ".light");
     g.preset = r.String(r.Need(gn, "preset", p + ".preset"), p + ".preset");
@@ -213,6 +258,20 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
     g.mae_m = r.Double(r.Need(gn, "mae_m", p + ".mae_m"), p + ".mae_m");
     if (gn["residual_std_m"]) {
       g.residual_std_m = r.Double(gn["residual_std_m"], p + ".residual_std_m");
+    }
+    if (const YAML::Node mn = gn["margin"]; mn) {
+      const std::string mp = p + ".margin";
+      if (!mn.IsMap()) r.Fail(mp, "expected a map {placement_m, noise_per_m, weighted}");
+      r.OnlyKeys(mn, mp, {"placement_m", "noise_per_m", "weighted"});
+      g.margin.known = true;
+      g.margin.placement_m = r.Double(r.Need(mn, "placement_m", mp + ".placement_m"),
+                                      mp + ".placement_m");
+      g.margin.noise_per_m = r.Double(r.Need(mn, "noise_per_m", mp + ".noise_per_m"),
+                                      mp + ".noise_per_m");
+      if (mn["weighted"]) g.margin.weighted = r.Bool(mn["weighted"], mp + ".weighted");
+      if (!(g.margin.placement_m >= 0) || !(g.margin.noise_per_m >= 0)) {
+        r.Fail(mp, "placement_m and noise_per_m must be finite and >= 0");
+      }
     }
     if (gn["cv"]) {
       const auto cv = r.Cv(gn["cv"], p + ".cv");

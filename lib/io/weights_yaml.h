@@ -1,15 +1,20 @@
 #pragma once
 // The weights YAML of DESIGN.md ("File formats"): the record a fit writes and a machine loads.
 //
-//   schema: depthbias.weights/1
+//   schema: depthbias.weights/2
 //   model: disp_knots          target: median_m - distance_m      lambda: 0.001
 //   loss: huber                loss_scale_m: 1      focal_px: 640  baseline_m: 0.095
 //   group_by: [light, preset]
+//   near_guard: {near_m: 5, full_m: 7}        noise_pooled: true
 //   groups:
 //     - {light, preset, [emitter], n, weights: {name: value, ...}, [knots_deg: [...]],
-//        rmse_m, mae_m, residual_std_m, cv: {scheme, rmse_m, mae_m}, [cv_more: [...]],
-//        covariance: [[...], ...]}
+//        rmse_m, mae_m, residual_std_m, [margin: {placement_m, noise_per_m, weighted}],
+//        cv: {scheme, rmse_m, mae_m}, [cv_more: [...]], covariance: [[...], ...]}
 //   provenance: {input_file, input_sha256, tool, tool_version}
+//
+// Schema depthbias.weights/1 (before margins: no near_guard, noise_pooled, margin) is still
+// read; its groups have margin.known = false and their predictive σ is the constant residual std
+// of that time. Files are always written as /2.
 
 #include <string>
 

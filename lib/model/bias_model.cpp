@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "model/fit.h"
+
 namespace depthbias::model {
 namespace {
 
@@ -17,8 +19,12 @@ bool Matches(const std::string& key, const std::string& value) {
 }  // namespace
 
 ScenarioModel::ScenarioModel(const records::BiasWeightsGroup& group,
-                             const FormConstants& constants, const std::string& model)
-    : group_(group) {
+                             const FormConstants& constants, const std::string& model,
+                             const NearGuard& guard)
+    : group_(group), guard_(guard) {
+  residual_.known = group.margin.known;
+  residual_.placement_m = group.margin.placement_m;
+  residual_.noise_per_m = group.margin.noise_per_m;
   FormConstants c = constants;
   c.knots_deg = group.knots_deg;
   form_ = MakeForm(model, c);
@@ -57,20 +63,41 @@ ScenarioModel::ScenarioModel(const records::BiasWeightsGroup& group,
   }
 }
 
-double ScenarioModel::BiasM(double depth_m, double angle_deg) const {
+double ScenarioModel::FittedBiasM(double depth_m, double angle_deg) const {
   return form_->Bias(group_.values.data(), At(depth_m, angle_deg));
+}
+
+double ScenarioModel::BiasM(double depth_m, double angle_deg) const {
+  return GuardedBias(FittedBiasM(depth_m, angle_deg), At(depth_m, angle_deg), guard_);
 }
 
 double ScenarioModel::CorrectedM(double depth_m, double angle_deg) const {
   return depth_m - BiasM(depth_m, angle_deg);
 }
 
+double ScenarioModel::RawRangeM(double depth_m, double angle_deg) {
+  return depth_m / std::cos(angle_deg * kDegToRad);
+}
+
+bool ScenarioModel::NearGuarded(double depth_m, double angle_deg) const {
+  double share = 1.0;
+  GuardedBias(FittedBiasM(depth_m, angle_deg), At(depth_m, angle_deg), guard_, &share);
+  return share < 1.0;
+}
+
 double ScenarioModel::PredictiveStdM(double depth_m, double angle_deg) const {
-  const double s = std::isfinite(group_.residual_std_m) ? group_.residual_std_m : 0.0;
-  if (covariance_.size() == 0) return s;
+  double share = 1.0;
+  GuardedBias(FittedBiasM(depth_m, angle_deg), At(depth_m, angle_deg), guard_, &share);
+  double s2 = 0.0;
+  if (residual_.known) {
+    s2 = residual_.VarianceM2(depth_m);
+  } else if (std::isfinite(group_.residual_std_m)) {
+    s2 = group_.residual_std_m * group_.residual_std_m;
+  }
+  if (covariance_.size() == 0) return std::sqrt(s2);
   const auto g = form_->BiasGradient(group_.values.data(), At(depth_m, angle_deg));
   const Eigen::Map<const Eigen::VectorXd> gv(g.data(), static_cast<Eigen::Index>(g.size()));
-  return std::sqrt(std::max(0.0, gv.dot(covariance_ * gv)) + s * s);
+  return std::sqrt(share * share * std::max(0.0, gv.dot(covariance_ * gv)) + s2);
 }
 
 double ScenarioModel::SafeDistanceM(double depth_m, double angle_deg, double k) const {
@@ -99,7 +126,10 @@ BiasModel::BiasModel(const records::BiasWeights& weights) : weights_(weights) {
   FormConstants c;
   c.focal_px = weights.focal_px;
   c.baseline_m = weights.baseline_m;
-  for (const auto& g : weights.groups) scenarios_.emplace_back(g, c, weights.model);
+  NearGuard guard{weights.near_m, weights.full_m};
+  std::string why;
+  if (!guard.IsValid(&why)) throw std::invalid_argument(why);
+  for (const auto& g : weights.groups) scenarios_.emplace_back(g, c, weights.model, guard);
 }
 
 const ScenarioModel* BiasModel::Find(const std::string& light, const std::string& preset,

@@ -12,6 +12,7 @@
 
 #include "records/bias_weights.h"
 #include "model/forms.h"
+#include "model/margin.h"
 
 namespace depthbias::model {
 
@@ -20,13 +21,21 @@ class ScenarioModel {
   // Throws std::invalid_argument when the group does not match the form (names, sizes,
   // covariance shape).
   ScenarioModel(const records::BiasWeightsGroup& group, const FormConstants& constants,
-                const std::string& model);
+                const std::string& model, const NearGuard& guard = {});
 
-  // b(Z, α) = measured − nominal distance [m], as fitted.
+  // b(Z, α) = measured − nominal distance [m] as reported: the fitted bias, except where the
+  // near guard holds back a correction that would move a near reading farther.
   double BiasM(double depth_m, double angle_deg) const;
   // The nominal distance (range to the target) the measurement stands for: Z − b(Z, α).
   double CorrectedM(double depth_m, double angle_deg) const;
-  // sqrt(gᵀ Σ g + σ²): parameter uncertainty at (Z, α) plus the residual scatter [m].
+  // The range the camera measured, Z / cos α, which the near guard falls back to [m].
+  static double RawRangeM(double depth_m, double angle_deg);
+  // True when the near guard holds back (part of) the model's correction at (Z, α): the model
+  // leaves this reading alone, or partly.
+  bool NearGuarded(double depth_m, double angle_deg) const;
+  // sqrt(s²·gᵀΣg + σ²(Z)): parameter uncertainty at (Z, α) (s: the share of the correction
+  // applied) plus the residual model σ²(Z) = σ_place² + (c·Z²)² [m]. Weights of schema 1 have no
+  // residual model: σ² is then their constant residual std².
   double PredictiveStdM(double depth_m, double angle_deg) const;
   // Corrected distance minus k predictive standard deviations: a distance the target is not
   // nearer than, with the confidence k stands for.
@@ -40,11 +49,18 @@ class ScenarioModel {
   int CorrectCloud(std::vector<Eigen::Vector3d>* points_m) const;
 
   const records::BiasWeightsGroup& group() const { return group_; }
+  // False for weights of schema 1: σ does not depend on the range there.
+  bool has_margin() const { return residual_.known; }
+  const ResidualModel& residual_model() const { return residual_; }
+  const NearGuard& guard() const { return guard_; }
 
  private:
+  double FittedBiasM(double depth_m, double angle_deg) const;
   records::BiasWeightsGroup group_;
   std::shared_ptr<const Form> form_;
   Eigen::MatrixXd covariance_;  // empty if unknown
+  ResidualModel residual_;
+  NearGuard guard_;
 };
 
 class BiasModel {

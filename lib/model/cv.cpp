@@ -69,8 +69,7 @@ CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& para
     r.message = "no cross-validation asked";
     return r;
   }
-  FitParams p = params;
-  p.compute_covariance = false;
+  FitParams p = params;  // with covariance: the held-out predictive σ
   const auto folds = FoldIds(samples, scheme);
   r.folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
   if (r.folds < 2) {
@@ -79,6 +78,7 @@ CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& para
     return r;
   }
   r.errors_m.assign(samples.size(), std::numeric_limits<double>::quiet_NaN());
+  r.std_m.assign(samples.size(), std::numeric_limits<double>::quiet_NaN());
   for (int f = 0; f < r.folds; ++f) {
     const auto train = Subset(samples, folds, f, false);
     const FitResult fit = Fit(train, p);
@@ -87,7 +87,9 @@ CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& para
       return r;
     }
     for (size_t i = 0; i < samples.size(); ++i) {
-      if (folds[i] == f) r.errors_m[i] = PredictBias(fit, samples[i].x) - samples[i].target_m;
+      if (folds[i] != f) continue;
+      r.errors_m[i] = PredictBias(fit, samples[i].x) - samples[i].target_m;
+      r.std_m[i] = PredictiveStd(fit, samples[i].x);
     }
   }
   Summarize(&r);

@@ -27,6 +27,7 @@ struct CvResult {
   double rmse_m = 0.0;       // of held-out errors, unweighted
   double mae_m = 0.0;
   std::vector<double> errors_m;  // predicted − target, per sample (held out)
+  std::vector<double> std_m;     // held-out predictive σ per sample
 };
 
 CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& params,

@@ -37,6 +37,20 @@ Loss ResolveLoss(Loss loss, const std::string& model) {
   return model == "paper6" ? Loss::kNone : Loss::kHuber;
 }
 
+bool MarginParams::Weighted(const std::string& model) const {
+  if (!enabled || weighting == Weighting::kOff) return false;
+  return weighting == Weighting::kOn || model != "paper6";
+}
+
+bool MarginParams::IsValid(std::string* why) const {
+  if (!enabled) return true;
+  if (rounds < 1) {
+    if (why) *why = "margins: rounds must be >= 1";
+    return false;
+  }
+  return residual.IsValid(why) && guard.IsValid(why);
+}
+
 bool FitParams::IsValid(std::string* why) const {
   auto fail = [why](const std::string& m) {
     if (why) *why = m;
@@ -62,7 +76,7 @@ bool FitParams::IsValid(std::string* why) const {
     }
   }
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  return true;
+  return margins.IsValid(why);
 }
 
 bool CheckDesign(const Form& form, const std::vector<Sample>& samples, std::string* why) {
@@ -204,17 +218,33 @@ FitResult Fit(const std::vector<Sample>& samples, const FitParams& params) {
   return result;
 }
 
+double GuardedBias(double bias_m, const Features& x, const NearGuard& guard, double* share) {
+  if (!guard.enabled()) {
+    if (share) *share = 1.0;
+    return bias_m;
+  }
+  const double z = x.depth_m;
+  const double raw_m = z / std::cos(x.angle_rad);  // the range the camera measured
+  return z - guard.Apply(z - bias_m, raw_m, share);
+}
+
 double PredictBias(const FitResult& fit, const Features& x) {
-  return fit.form->Bias(fit.values.data(), x);
+  return GuardedBias(fit.form->Bias(fit.values.data(), x), x, fit.guard);
 }
 
 double PredictiveStd(const FitResult& fit, const Features& x) {
-  const double s2 = std::isfinite(fit.residual_std_m) ? fit.residual_std_m * fit.residual_std_m
-                                                      : 0.0;
+  double share = 1.0;
+  GuardedBias(fit.form->Bias(fit.values.data(), x), x, fit.guard, &share);
+  double s2 = 0.0;
+  if (fit.residual_model.known) {
+    s2 = fit.residual_model.VarianceM2(x.depth_m);
+  } else if (std::isfinite(fit.residual_std_m)) {
+    s2 = fit.residual_std_m * fit.residual_std_m;
+  }
   if (!fit.covariance_ok) return std::sqrt(s2);
   const auto g = fit.form->BiasGradient(fit.values.data(), x);
   const Eigen::Map<const Eigen::VectorXd> gv(g.data(), static_cast<Eigen::Index>(g.size()));
-  return std::sqrt(gv.dot(fit.covariance * gv) + s2);
+  return std::sqrt(share * share * gv.dot(fit.covariance * gv) + s2);
 }
 
 }  // namespace depthbias::model

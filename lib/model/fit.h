@@ -11,6 +11,7 @@
 
 #include "camera/intrinsics.h"
 #include "model/forms.h"
+#include "model/margin.h"
 #include "model/samples.h"
 
 namespace depthbias::model {
@@ -31,6 +32,27 @@ struct PriorOverride {
   double strength = 0.0;  // λ_j [1/unit²·m²]; 0 = free
 };
 
+// The margins of a fit (margin.h, margin_fit.h): a residual model σ²(Z) = σ_place² + (c·Z²)²
+// fitted by maximum likelihood to held-out errors, the bias fit weighted by 1/σ²(Z) (iterated),
+// and the near guard. Used by FitWithMargins / FitGroups; the plain Fit ignores it.
+struct MarginParams {
+  bool enabled = true;
+  // Weighting of the bias fit by 1/σ²(Z): kAuto weights the disparity-space forms and leaves
+  // paper6 unweighted (the article's ridge, Table 6).
+  enum class Weighting { kAuto, kOn, kOff };
+  Weighting weighting = Weighting::kAuto;
+  int rounds = 3;  // fit ↔ residual model alternations
+  ResidualFitParams residual;
+  // Below a measured range of 5 m a correction that would push a reading farther is not
+  // applied, blended in up to 7 m: out of sample no model predicts the article's 4 m biases
+  // (their spread is the panel's placement, not the camera), and a 0.1 px disparity offset
+  // moves a 5 m reading by 4 cm only.
+  NearGuard guard{5.0, 7.0};
+
+  bool Weighted(const std::string& model) const;
+  bool IsValid(std::string* why) const;
+};
+
 struct FitParams {
   std::string model = "disp_knots";  // one of FormNames()
   double lambda = 0.001;   // prior strength of every penalized parameter [m²/unit²]
@@ -42,6 +64,7 @@ struct FitParams {
   std::vector<PriorOverride> priors;
   int max_iterations = 200;
   bool compute_covariance = true;
+  MarginParams margins;
 
   bool IsValid(std::string* why) const;
 };
@@ -65,6 +88,11 @@ struct FitResult {
   std::string solver_report;    // Ceres' BriefReport()
   int iterations = 0;
   double final_cost = 0.0;
+  // Set by FitWithMargins: the residual model of this scenario, the guard its predictions use,
+  // and whether the fit was weighted by 1/σ²(Z) (covariance then from that weighting).
+  ResidualModel residual_model;
+  NearGuard guard;
+  bool margin_weighted = false;
 };
 
 // Checks the design against the form before fitting: n ≥ number of parameters, enough
@@ -78,9 +106,15 @@ std::unique_ptr<Form> FormFor(const FitParams& params, const std::vector<Sample>
 // Fits; never throws for bad data (success = false and message say why).
 FitResult Fit(const std::vector<Sample>& samples, const FitParams& params);
 
-// Predicted bias with a fitted result, and its predictive standard deviation
-// sqrt(gᵀ Σ g + σ²) with g = ∂b/∂θ, Σ the covariance and σ the residual std.
+// Predicted bias with a fitted result (the near guard applied, when the fit has one), and its
+// predictive standard deviation sqrt(s²·gᵀΣg + σ²(Z)) with g = ∂b/∂θ, Σ the covariance, s the
+// guard's share of the correction and σ²(Z) the residual model (or the constant residual std of
+// a fit without one).
 double PredictBias(const FitResult& fit, const Features& x);
 double PredictiveStd(const FitResult& fit, const Features& x);
+// The bias as reported once the guard has had its say: Z − guard(Z − b, Z / cos α). *share gets
+// the share of the correction applied.
+double GuardedBias(double bias_m, const Features& x, const NearGuard& guard,
+                   double* share = nullptr);
 
 }  // namespace depthbias::model

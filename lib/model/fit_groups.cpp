@@ -5,6 +5,8 @@
 #include <limits>
 #include <map>
 
+#include "model/margin_fit.h"
+
 namespace depthbias::model {
 
 bool FitGroupsParams::IsValid(std::string* why) const {
@@ -39,18 +41,40 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
     report.message = "no row with status ok to fit";
     return report;
   }
-  for (const auto& g : GroupRows(rows, params.group_by)) {
+  const auto groups = GroupRows(rows, params.group_by);
+  std::vector<std::vector<Sample>> samples;
+  for (const auto& g : groups) {
+    samples.push_back(MakeSamples(rows, g.rows, params.fit.weight_by_valid_pixels));
+  }
+  // Every scenario fitted with its margin, together (one camera: the noise term may be pooled).
+  const JointFitResult joint = FitWithMargins(samples, params.fit);
+  if (!joint.success) {
+    // Name the scenario that failed.
+    for (size_t k = 0; k < groups.size(); ++k) {
+      const FitResult f = Fit(samples[k], params.fit);
+      if (!f.success) {
+        report.message = "group " + groups[k].Label() + ": " + f.message;
+        return report;
+      }
+    }
+    report.message = joint.message;
+    return report;
+  }
+  for (size_t k = 0; k < groups.size(); ++k) {
+    const Group& g = groups[k];
     GroupReport gr;
     gr.group = g;
-    const auto samples = MakeSamples(rows, g.rows, params.fit.weight_by_valid_pixels);
-    gr.fit = Fit(samples, params.fit);
-    if (!gr.fit.success) {
-      report.message = "group " + g.Label() + ": " + gr.fit.message;
-      return report;
-    }
+    gr.samples = samples[k];
+    gr.fit = joint.fits[k];
+    // Cross-validation of the whole procedure; the other scenarios' errors stay as fitted.
+    std::vector<ResidualData> others;
+    for (size_t o = 0; o < joint.errors.size(); ++o)
+      if (o != k) others.push_back(joint.errors[o]);
     for (CvScheme s : params.cv) {
       if (s == CvScheme::kNone) continue;
-      gr.cv.push_back(CrossValidate(samples, params.fit, s));
+      gr.cv.push_back(params.fit.margins.enabled
+                          ? CrossValidateWithMargins(samples[k], params.fit, s, others)
+                          : CrossValidate(samples[k], params.fit, s));
       if (!gr.cv.back().success) {
         gr.cv.back().rmse_m = gr.cv.back().mae_m = std::numeric_limits<double>::quiet_NaN();
         report.warnings.push_back("group " + g.Label() + ": no " + CvSchemeName(s) +
@@ -59,7 +83,7 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
     }
     if (!params.nested_candidates.empty() && !params.cv.empty() &&
         params.cv.front() != CvScheme::kNone) {
-      gr.nested = NestedCrossValidate(samples, params.nested_candidates, params.cv.front(),
+      gr.nested = NestedCrossValidate(samples[k], params.nested_candidates, params.cv.front(),
                                       &gr.nested_chosen);
       if (!gr.nested.success) {
         gr.nested.rmse_m = std::numeric_limits<double>::quiet_NaN();
@@ -149,6 +173,76 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
   return out;
 }
 
+std::vector<CoverageRow> Coverage(const FitReport& report, double k) {
+  std::map<long long, CoverageRow> rows;
+  const size_t groups = report.groups.size();
+  for (size_t g = 0; g < groups; ++g) {
+    const GroupReport& gr = report.groups[g];
+    if (gr.cv.empty() || !gr.cv.front().success) continue;
+    const CvResult& cv = gr.cv.front();
+    const auto& samples = gr.samples;
+    for (size_t i = 0; i < samples.size() && i < cv.errors_m.size(); ++i) {
+      CoverageRow& row = rows[std::llround(samples[i].distance_m * 1e6)];
+      if (row.group_n.empty()) {
+        row.distance_m = samples[i].distance_m;
+        row.group_n.assign(groups, 0);
+        row.group_beyond.assign(groups, 0);
+        row.group_mean_error_m.assign(groups, 0.0);
+      }
+      // corrected − truth = (Z − b̂) − D = (Z − D) − b̂ = −(held-out error).
+      const double error_m = -cv.errors_m[i];
+      const double std_m = i < cv.std_m.size() ? cv.std_m[i] : std::nan("");
+      const bool beyond = error_m > k * std_m;
+      ++row.n;
+      row.beyond += beyond;
+      row.mean_error_m += error_m;
+      row.mean_std_m += std_m;
+      ++row.group_n[g];
+      row.group_beyond[g] += beyond;
+      row.group_mean_error_m[g] += error_m;
+    }
+  }
+  std::vector<CoverageRow> out;
+  for (auto& [key, row] : rows) {
+    row.mean_error_m /= row.n;
+    row.mean_std_m /= row.n;
+    for (size_t g = 0; g < groups; ++g)
+      if (row.group_n[g] > 0) row.group_mean_error_m[g] /= row.group_n[g];
+    out.push_back(row);
+  }
+  return out;
+}
+
+std::string FormatCoverageTable(const FitReport& report, double k) {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf),
+                "coverage of corrected - %g*sigma, held out (%s): share of truths beyond it\n",
+                k, report.groups.empty() || report.groups[0].cv.empty()
+                       ? "none"
+                       : CvSchemeName(report.groups[0].cv.front().scheme).c_str());
+  std::string out = buf;
+  std::snprintf(buf, sizeof(buf), "%10s %4s %8s %7s %12s %10s", "distance_m", "n", "beyond",
+                "share", "mean_err_m", "mean_std_m");
+  out += buf;
+  for (const auto& g : report.groups) {
+    std::snprintf(buf, sizeof(buf), " %18s", (g.group.Label() + " b/n err").c_str());
+    out += buf;
+  }
+  out += "\n";
+  for (const CoverageRow& r : Coverage(report, k)) {
+    std::snprintf(buf, sizeof(buf), "%10g %4d %8d %6.1f%% %+12.3f %10.3f", r.distance_m, r.n,
+                  r.beyond, 100.0 * r.beyond / std::max(1, r.n), r.mean_error_m, r.mean_std_m);
+    out += buf;
+    for (size_t g = 0; g < r.group_n.size(); ++g) {
+      std::snprintf(buf, sizeof(buf), " %9d/%-2d %+6.3f", r.group_beyond[g], r.group_n[g],
+                    r.group_mean_error_m[g]);
+      out += buf;
+    }
+    out += "\n";
+  }
+  return out;
+}
+
 records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params) {
   records::BiasWeights w;
   w.model = params.fit.model;
@@ -158,6 +252,11 @@ records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& p
   w.focal_px = params.fit.focal_px;
   w.baseline_m = params.fit.baseline_m;
   w.group_by = params.group_by;
+  if (params.fit.margins.enabled) {
+    w.near_m = params.fit.margins.guard.near_m;
+    w.full_m = params.fit.margins.guard.full_m;
+    w.noise_pooled = params.fit.margins.residual.pool_noise;
+  }
   for (const auto& gr : report.groups) {
     records::BiasWeightsGroup g;
     g.light = gr.group.light;
@@ -171,6 +270,12 @@ records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& p
     g.mae_m = gr.fit.mae_m;
     g.residual_std_m = gr.fit.residual_std_m;
     for (const auto& cv : gr.cv) g.cv.push_back({CvSchemeName(cv.scheme), cv.rmse_m, cv.mae_m});
+    if (gr.fit.residual_model.known) {
+      g.margin.known = true;
+      g.margin.placement_m = gr.fit.residual_model.placement_m;
+      g.margin.noise_per_m = gr.fit.residual_model.noise_per_m;
+      g.margin.weighted = gr.fit.margin_weighted;
+    }
     if (gr.fit.covariance_ok) {
       const auto& c = gr.fit.covariance;
       for (Eigen::Index i = 0; i < c.rows(); ++i) {

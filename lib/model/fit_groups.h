@@ -27,6 +27,7 @@ struct FitGroupsParams {
 
 struct GroupReport {
   Group group;
+  std::vector<Sample> samples;  // the group's rows as fitted (the cross-validations' order)
   FitResult fit;
   std::vector<CvResult> cv;  // as FitGroupsParams::cv, kNone left out
   CvResult nested;           // when nested_candidates were given
@@ -54,6 +55,22 @@ std::vector<FitParams> DefaultCandidates(const FitParams& base);
 // A plain-text table of the report: per group n, in-sample and cross-validated RMSE / MAE,
 // the nested estimate if any, and the weights.
 std::string FormatFitTable(const FitReport& report, const FitGroupsParams& params);
+
+// Coverage of the safe distance out of sample, per nominal distance: the share of held-out rows
+// whose truth lies below corrected − k·σ (the dangerous side), from the first scheme's
+// cross-validation (CrossValidateWithMargins: each row predicted by a fit that did not see its
+// test point). With a normal error, k = 2 promises at most 2.3 % beyond.
+struct CoverageRow {
+  double distance_m = 0.0;
+  int n = 0;                        // rows, every group
+  int beyond = 0;                   // truth < corrected − k·σ
+  double mean_error_m = 0.0;        // mean of corrected − truth (+: reads farther than truth)
+  double mean_std_m = 0.0;          // mean held-out σ
+  std::vector<int> group_n, group_beyond;  // per group, in report order
+  std::vector<double> group_mean_error_m;
+};
+std::vector<CoverageRow> Coverage(const FitReport& report, double k);
+std::string FormatCoverageTable(const FitReport& report, double k);
 
 // The weights record of a successful report (provenance left empty for the caller).
 records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params);

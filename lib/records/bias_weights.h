@@ -14,6 +14,15 @@ struct BiasCrossValidation {
   double mae_m = 0.0;
 };
 
+// The residual model of a scenario (model/margin.h): σ²(Z) = σ_place² + (c·Z²)², fitted to the
+// held-out errors.
+struct BiasMargin {
+  bool known = false;        // false: weights of schema 1, which hold only residual_std_m
+  double placement_m = 0.0;  // σ_place [m]
+  double noise_per_m = 0.0;  // c [1/m]
+  bool weighted = false;     // the bias fit was weighted by 1/σ²(Z)
+};
+
 // One fitted scenario (a group of rows, e.g. one light and preset).
 struct BiasWeightsGroup {
   std::string light;   // the group's light, or "*" when light is not a grouping key
@@ -28,10 +37,11 @@ struct BiasWeightsGroup {
   double residual_std_m = 0.0;          // sqrt(RSS / (n − p)): the unexplained scatter
   std::vector<BiasCrossValidation> cv;  // one entry per scheme run
   std::vector<std::vector<double>> covariance;  // of values, names × names; empty if unknown
+  BiasMargin margin;
 };
 
 struct BiasWeights {
-  std::string schema = "depthbias.weights/1";
+  std::string schema = "depthbias.weights/2";
   std::string model;   // "paper6", "disp_scale", ...
   std::string target = "median_m - distance_m";  // what the bias means
   double lambda = 0.0;  // default prior strength of the fit
@@ -40,6 +50,11 @@ struct BiasWeights {
   double focal_px = 0.0;    // constants of disparity-space forms
   double baseline_m = 0.0;
   std::vector<std::string> group_by;  // e.g. {"light", "preset"}
+  // Near guard (model/margin.h): below near_m a correction that would move a reading farther is
+  // not applied, blended in up to full_m [m]; both 0: off.
+  double near_m = 0.0;
+  double full_m = 0.0;
+  bool noise_pooled = false;  // one noise coefficient c for every group
   std::vector<BiasWeightsGroup> groups;
   // Provenance.
   std::string input_file;

@@ -121,6 +121,33 @@ void ReadScenario(MapReader& r, ScenarioParams* s) {
   r.Double("invalid_prob", &s->invalid_prob);
 }
 
+// scene.obstacles: [{kind: person, range_m: 5, azimuth_deg: -10}, {kind: bush, ...}]; a kind's
+// sizes and texture (ObstacleOfKind) unless named.
+std::vector<Obstacle> ReadObstacles(const YAML::Node& n, const std::string& where) {
+  if (!n.IsSequence()) throw ParseError(where + ": expected a list, got " + Text(n));
+  std::vector<Obstacle> out;
+  for (size_t i = 0; i < n.size(); ++i) {
+    MapReader r(n[i], where + "[" + std::to_string(i) + "]");
+    std::string kind = "person";
+    r.String("kind", &kind);
+    Obstacle o;
+    if (!ObstacleOfKind(kind, &o))
+      throw ParseError(r.Where("kind") + ": unknown kind '" + kind +
+                       "' (person, bush, box, ellipsoid)");
+    if (!r.Get("range_m") || !r.Get("azimuth_deg"))
+      throw ParseError(r.Where("range_m") + " and azimuth_deg are required");
+    r.Double("range_m", &o.range_m);
+    r.Double("azimuth_deg", &o.azimuth_deg);
+    r.Double("width_m", &o.width_m);
+    r.Double("depth_m", &o.depth_m);
+    r.Double("height_m", &o.height_m);
+    r.Double("texture", &o.texture);
+    r.CheckKnown();
+    out.push_back(o);
+  }
+  return out;
+}
+
 template <typename F>
 bool Guard(std::string* why, F body) {
   try {
@@ -181,6 +208,15 @@ bool ParseProtocolYaml(const std::string& text, ProtocolParams* protocol,
       r.Double("panel_texture", &s.panel_texture);
       r.Double("background_distance_m", &s.background_distance_m);
       r.Double("background_texture", &s.background_texture);
+      if (auto v = r.Get("panel")) s.panel = ToOnOff(v, r.Where("panel"));
+      if (auto v = r.Get("obstacles")) s.obstacles = ReadObstacles(v, r.Where("obstacles"));
+      if (auto v = r.Get("hedge")) {
+        MapReader h(v, r.Where("hedge"));
+        h.Double("distance_m", &s.hedge.distance_m);
+        h.Double("height_m", &s.hedge.height_m);
+        h.Double("texture", &s.hedge.texture);
+        h.CheckKnown();
+      }
       r.CheckKnown();
     }
     top.String("sensor", &sensor);

@@ -15,8 +15,9 @@
 namespace depthbias::sim {
 
 // protocol: {distances_m, angles_deg, presets, emitters, lights, distance_is, frames, fps},
-// scene: {...SceneParams}, and optionally sensor: FILE (a sensor YAML, relative to the protocol
-// file's folder) returned in *sensor_file.
+// scene: {...SceneParams, panel: on|off, obstacles: [{kind, range_m, azimuth_deg, [width_m,
+// depth_m, height_m, texture]}, ...], hedge: {distance_m, height_m, texture}}, and optionally
+// sensor: FILE (a sensor YAML, relative to the protocol file's folder) returned in *sensor_file.
 bool ParseProtocolYaml(const std::string& text, ProtocolParams* protocol,
                        std::string* sensor_file, std::string* why);
 

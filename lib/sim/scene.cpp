@@ -3,6 +3,7 @@
 #include "camera/presets.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include <Eigen/Geometry>
@@ -54,6 +55,37 @@ bool ParseDistanceIs(const std::string& name, DistanceIs* d) {
   return true;
 }
 
+bool ObstacleOfKind(const std::string& kind, Obstacle* o) {
+  Obstacle d;
+  d.kind = kind;
+  if (kind == "person" || kind == "box") {
+    d.shape = ObstacleShape::kBox;  // the defaults: 0.5 × 0.3 × 1.75 m, texture 0.5
+  } else if (kind == "bush" || kind == "ellipsoid") {
+    d.shape = ObstacleShape::kEllipsoid;
+    d.width_m = 1.0;
+    d.depth_m = 0.8;
+    d.height_m = 0.9;
+    d.texture = 0.7;
+  } else {
+    return false;
+  }
+  *o = d;
+  return true;
+}
+
+bool Obstacle::IsValid(std::string* why) const {
+  if (!(width_m > 0) || !(depth_m > 0) || !(height_m > 0) || !std::isfinite(width_m) ||
+      !std::isfinite(depth_m) || !std::isfinite(height_m))
+    return Fail(why, "obstacle '" + kind + "': width_m, depth_m and height_m must be > 0");
+  if (!(range_m > 0) || !std::isfinite(range_m))
+    return Fail(why, "obstacle '" + kind + "': range_m must be > 0");
+  if (!(std::fabs(azimuth_deg) < 80))
+    return Fail(why, "obstacle '" + kind + "': azimuth_deg must be in (-80, 80)");
+  if (!(texture >= 0 && texture <= 1))
+    return Fail(why, "obstacle '" + kind + "': texture must be in [0, 1]");
+  return true;
+}
+
 bool SceneParams::IsValid(std::string* why) const {
   if (!(camera_height_m > 0)) return Fail(why, "camera_height_m must be > 0");
   if (!(std::fabs(camera_pitch_deg) < 80))
@@ -64,8 +96,21 @@ bool SceneParams::IsValid(std::string* why) const {
   if (!(panel_center_height_m >= 0)) return Fail(why, "panel_center_height_m must be >= 0");
   if (!(std::fabs(panel_yaw_deg) < 89)) return Fail(why, "panel_yaw_deg must be in (-89, 89)");
   if (!(background_distance_m > 0)) return Fail(why, "background_distance_m must be > 0");
-  for (double t : {ground_texture, panel_texture, background_texture})
+  for (double t : {ground_texture, panel_texture, background_texture, hedge.texture})
     if (!(t >= 0 && t <= 1)) return Fail(why, "textures must be in [0, 1]");
+  for (const Obstacle& o : obstacles) {
+    if (!o.IsValid(why)) return false;
+    // The face's centre is half the height above the ground: the range must reach it.
+    if (!(o.range_m > std::fabs(camera_height_m - 0.5 * o.height_m)))
+      return Fail(why, "obstacle '" + o.kind + "' at " + Number(o.range_m) +
+                           " m: range_m must exceed the face centre's drop below the camera");
+  }
+  if (!(hedge.distance_m >= 0) || !std::isfinite(hedge.distance_m))
+    return Fail(why, "hedge.distance_m must be >= 0 (0: no hedge)");
+  if (hedge.distance_m > 0 && !(hedge.height_m > 0))
+    return Fail(why, "hedge.height_m must be > 0");
+  if (!panel && obstacles.empty() && hedge.distance_m == 0)
+    return Fail(why, "a scene without a panel needs obstacles or a hedge");
   return true;
 }
 
@@ -88,18 +133,25 @@ bool ProtocolParams::IsValid(std::string* why) const {
 }
 
 std::string CellName(const Cell& c) {
-  return "sim_" + c.light + "_emitter-" + (c.emitter_on ? "on" : "off") + "_" +
-         Number(c.distance_m) + "m_" + Number(c.angle_deg) + "deg_" + c.preset;
+  const std::string where =
+      c.panel ? Number(c.distance_m) + "m_" + Number(c.angle_deg) + "deg_" : "obstacles_";
+  return "sim_" + c.light + "_emitter-" + (c.emitter_on ? "on" : "off") + "_" + where + c.preset;
 }
 
 std::vector<Cell> MakeCells(const ProtocolParams& p) {
   std::vector<Cell> cells;
+  // Without a panel the test points place nothing: one recording per (light, emitter, preset).
+  const std::vector<double> angles =
+      p.scene.panel ? p.angles_deg : std::vector<double>{p.angles_deg.front()};
+  const std::vector<double> distances =
+      p.scene.panel ? p.distances_m : std::vector<double>{p.distances_m.front()};
   for (const auto& light : p.lights)
     for (bool emitter : p.emitters)
-      for (double angle : p.angles_deg)
+      for (double angle : angles)
         for (const auto& preset : p.presets)
-          for (double distance : p.distances_m) {
+          for (double distance : distances) {
             Cell c;
+            c.panel = p.scene.panel;
             c.distance_m = distance;
             c.angle_deg = angle;
             c.preset = preset;
@@ -153,10 +205,75 @@ PanelPose PlacePanel(const SceneParams& scene, DistanceIs distance_is, const Cel
   return pose;
 }
 
+std::vector<ObstaclePose> PlaceObstacles(const SceneParams& scene) {
+  const Eigen::Matrix3d camera_from_level = LevelFromCamera(scene).transpose();
+  std::vector<ObstaclePose> poses;
+  for (const Obstacle& o : scene.obstacles) {
+    // The face centre F = (h sinφ, drop, h cosφ) in the level frame, |F| = range; the obstacle
+    // extends away from the camera along the horizontal line of sight.
+    const double a = o.azimuth_deg * kDegToRad;
+    const double drop_m = scene.camera_height_m - 0.5 * o.height_m;  // + below the camera
+    const double h = std::sqrt(std::max(o.range_m * o.range_m - drop_m * drop_m, 0.0));
+    const Eigen::Vector3d away(std::sin(a), 0, std::cos(a));
+    const Eigen::Vector3d across(std::cos(a), 0, -std::sin(a));
+    const Eigen::Vector3d face_level(h * std::sin(a), drop_m, h * std::cos(a));
+    ObstaclePose pose;
+    pose.obstacle = o;
+    pose.face_center_m = camera_from_level * face_level;
+    pose.center_m = camera_from_level * (face_level + 0.5 * o.depth_m * away);
+    pose.axes.col(0) = camera_from_level * across;
+    pose.axes.col(1) = camera_from_level * Eigen::Vector3d::UnitY();
+    pose.axes.col(2) = camera_from_level * away;
+    pose.half_m = 0.5 * Eigen::Vector3d(o.width_m, o.height_m, o.depth_m);
+    pose.face_range_m = pose.face_center_m.norm();
+    pose.face_azimuth_deg = std::atan2(pose.face_center_m.x(), pose.face_center_m.z()) / kDegToRad;
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
 RayCaster::RayCaster(const SceneParams& scene, const PanelPose& panel)
-    : scene_(scene), panel_(panel), level_from_camera_(LevelFromCamera(scene)) {
+    : scene_(scene),
+      panel_(panel),
+      level_from_camera_(LevelFromCamera(scene)),
+      obstacles_(PlaceObstacles(scene)) {
   panel_offset_ = panel_.normal.dot(panel_.center_m);
 }
+
+namespace {
+
+// Depth Z (the ray parameter of p = t·(xn, yn, 1)) where the ray enters an obstacle; 0 if it
+// misses. In the obstacle's frame the ray starts at o = Aᵀ(0 − c) with direction Aᵀ·ray.
+double HitObstacle(const ObstaclePose& pose, double xn, double yn) {
+  const Eigen::Vector3d ray(xn, yn, 1.0);
+  const Eigen::Vector3d o = -(pose.axes.transpose() * pose.center_m);
+  const Eigen::Vector3d d = pose.axes.transpose() * ray;
+  if (pose.obstacle.shape == ObstacleShape::kEllipsoid) {
+    // |(o + t·d) / half|² = 1: the nearer root.
+    const Eigen::Vector3d os = o.cwiseQuotient(pose.half_m), ds = d.cwiseQuotient(pose.half_m);
+    const double qa = ds.squaredNorm(), qb = os.dot(ds), qc = os.squaredNorm() - 1.0;
+    const double disc = qb * qb - qa * qc;
+    if (disc < 0 || qa <= 0) return 0.0;
+    const double t = (-qb - std::sqrt(disc)) / qa;
+    return t > 0 ? t : 0.0;
+  }
+  // Box: slabs.
+  double t_in = 0.0, t_out = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    if (std::fabs(d[k]) < 1e-15) {
+      if (std::fabs(o[k]) > pose.half_m[k]) return 0.0;
+      continue;
+    }
+    double t0 = (-pose.half_m[k] - o[k]) / d[k], t1 = (pose.half_m[k] - o[k]) / d[k];
+    if (t0 > t1) std::swap(t0, t1);
+    t_in = std::max(t_in, t0);
+    t_out = std::min(t_out, t1);
+    if (t_in > t_out) return 0.0;
+  }
+  return t_in > 0 ? t_in : 0.0;
+}
+
+}  // namespace
 
 Hit RayCaster::Cast(double xn, double yn) const {
   // The ray p(t) = t·(xn, yn, 1) in the camera frame: t is the depth Z of the point. Plain
@@ -176,7 +293,7 @@ Hit RayCaster::Cast(double xn, double yn) const {
   };
   // Panel: n·(t·ray) = n·c, inside the rectangle.
   const double denom = n.x() * xn + n.y() * yn + n.z();
-  if (std::fabs(denom) > 1e-12) {
+  if (scene_.panel && std::fabs(denom) > 1e-12) {
     const double t = panel_offset_ / denom;
     const double qx = t * xn - c.x(), qy = t * yn - c.y(), qz = t - c.z();
     if (std::fabs(qx * aw.x() + qy * aw.y() + qz * aw.z()) <= 0.5 * panel_.width_m &&
@@ -189,6 +306,15 @@ Hit RayCaster::Cast(double xn, double yn) const {
   if (ly > 1e-12) take(scene_.camera_height_m / ly, Surface::kGround, scene_.ground_texture);
   if (lz > 1e-12)
     take(scene_.background_distance_m / lz, Surface::kBackground, scene_.background_texture);
+  // Hedge: the wall z_level = its distance, from the ground (y_level = camera height) up to its
+  // height.
+  if (scene_.hedge.distance_m > 0 && lz > 1e-12) {
+    const double t = scene_.hedge.distance_m / lz;
+    if (t * ly >= scene_.camera_height_m - scene_.hedge.height_m)
+      take(t, Surface::kHedge, scene_.hedge.texture);
+  }
+  for (const ObstaclePose& pose : obstacles_)
+    take(HitObstacle(pose, xn, yn), Surface::kObstacle, pose.obstacle.texture);
   return best;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // The scene of one recording: a camera above a textured ground, the 1×1 m grey panel at a test
-// point, and a background wall; the article's protocol that lists the test points; and the ray
-// caster that gives the true depth Z of every pixel.
+// point, and a background wall; optionally obstacles standing on the ground (person-sized boxes,
+// bushes) and a far hedge; the article's protocol that lists the test points; and the ray caster
+// that gives the true depth Z of every pixel.
 //
 // Frames: the camera frame is librealsense's (x right, y down, z forward). The level frame has
 // its origin at the camera's optical centre, y down along gravity and z forward horizontally; the
@@ -20,6 +21,33 @@ enum class DistanceIs { kRange, kDepth };
 std::string DistanceIsName(DistanceIs d);
 bool ParseDistanceIs(const std::string& name, DistanceIs* d);
 
+// Something standing on the ground in front of the camera. Its position is given as a detector
+// reports it: the range from the optical centre to the centre of its face towards the camera,
+// and the horizontal azimuth of that point (+ right). It is turned to face the camera.
+enum class ObstacleShape { kBox, kEllipsoid };
+struct Obstacle {
+  std::string kind = "person";  // person (a box), bush (an ellipsoid), box, ellipsoid
+  ObstacleShape shape = ObstacleShape::kBox;
+  double range_m = 5.0;        // to the centre of the face towards the camera [m]
+  double azimuth_deg = 0.0;    // horizontal, + to the right [deg]
+  double width_m = 0.5;        // across the line of sight [m]
+  double depth_m = 0.3;        // along the line of sight [m]
+  double height_m = 1.75;      // above the ground [m]
+  double texture = 0.5;        // [0, 1] (clothes; foliage 0.7)
+
+  bool IsValid(std::string* why) const;
+};
+// Defaults of a kind: person 0.5 × 0.3 × 1.75 m box (texture 0.5), bush 1.0 × 0.8 × 0.9 m
+// ellipsoid (texture 0.7). False for an unknown kind.
+bool ObstacleOfKind(const std::string& kind, Obstacle* obstacle);
+
+// A hedge across the whole view: a vertical wall of foliage from the ground up.
+struct Hedge {
+  double distance_m = 0.0;  // forward horizontal distance of its face [m]; 0: no hedge
+  double height_m = 2.0;    // [m]
+  double texture = 0.7;     // [0, 1]
+};
+
 struct SceneParams {
   double camera_height_m = 1.0;      // optical centre above the ground [m]
   double camera_pitch_deg = 0.0;     // optical axis below the horizon [deg]
@@ -32,12 +60,16 @@ struct SceneParams {
   double panel_texture = 0.2;        // texture measure of the grey panel in [0, 1]
   double background_distance_m = 50.0;  // vertical wall at this forward distance [m]
   double background_texture = 0.5;      // [0, 1]
+  bool panel = true;  // false: no panel (an obstacle scene; the cell's distance places nothing)
+  std::vector<Obstacle> obstacles;
+  Hedge hedge;
 
   bool IsValid(std::string* why) const;
 };
 
 // One recording of a protocol.
 struct Cell {
+  bool panel = true;      // false: an obstacle scene (named ..._obstacles_<preset>)
   std::string name;       // recording id, also the bag's file stem
   double distance_m = 4;  // nominal distance
   double angle_deg = 0;   // nominal horizontal off-axis position, + to the right
@@ -61,7 +93,9 @@ struct ProtocolParams {
 };
 
 // The recordings of a protocol, in the article's order (light, emitter, angle, preset,
-// distance), named like the article's ids: sim_<light>_emitter-<on|off>_<D>m_<A>deg_<preset>.
+// distance), named like the article's ids: sim_<light>_emitter-<on|off>_<D>m_<A>deg_<preset>;
+// without a panel, one recording per (light, emitter, preset):
+// sim_<light>_emitter-<on|off>_obstacles_<preset>.
 std::vector<Cell> MakeCells(const ProtocolParams& protocol);
 std::string CellName(const Cell& cell);
 
@@ -85,8 +119,23 @@ Eigen::Matrix3d LevelFromCamera(const SceneParams& scene);
 PanelPose PlacePanel(const SceneParams& scene, DistanceIs distance_is, const Cell& cell,
                      double range_vs_depth_weight = 0.0, double extra_yaw_deg = 0.0);
 
+// Where an obstacle stands, in the camera frame: a box or an ellipsoid with its centre, its axes
+// (unit: across, down, along the line of sight away from the camera) and half extents.
+struct ObstaclePose {
+  Obstacle obstacle;
+  Eigen::Vector3d center_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // columns: across, down, away
+  Eigen::Vector3d half_m = Eigen::Vector3d::Zero();    // half width, height, depth
+  Eigen::Vector3d face_center_m = Eigen::Vector3d::Zero();  // the truth a detector reports
+  double face_range_m = 0.0;
+  double face_azimuth_deg = 0.0;  // atan2(x, z) of the face centre in the camera frame
+};
+std::vector<ObstaclePose> PlaceObstacles(const SceneParams& scene);
+
 // What a ray from the optical centre meets first.
-enum class Surface : unsigned char { kNone = 0, kPanel = 1, kGround = 2, kBackground = 3 };
+enum class Surface : unsigned char {
+  kNone = 0, kPanel = 1, kGround = 2, kBackground = 3, kObstacle = 4, kHedge = 5
+};
 struct Hit {
   double depth_m = 0.0;  // Z of the hit point in the camera frame; 0 when nothing is hit
   Surface surface = Surface::kNone;
@@ -104,6 +153,7 @@ class RayCaster {
   PanelPose panel_;
   Eigen::Matrix3d level_from_camera_;
   double panel_offset_ = 0.0;  // normal · center
+  std::vector<ObstaclePose> obstacles_;
 };
 
 }  // namespace depthbias::sim

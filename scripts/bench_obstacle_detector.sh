@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# Benchmark of obstacle_detector (lib/detect) on 1280x720 recordings, one core, the whole
+# process timed (start-up, weights, bag reading, detection, JSONL written), beside two peers on
+# the same bag and the same core:
+#   - librealsense's own playback alone (pyrealsense2 from .venv, non-real-time, every depth
+#     frame's pixels touched): what any detector built on librealsense pays before computing;
+#   - depthbias's BagReader alone (bag_info --read-all): this detector's share spent reading.
+# The recording: simulate's obstacle scene (config/protocol_obstacles.yaml: seven people, two
+# bushes, a hedge; High Density, emitter on), FRAMES frames. Target: >= 30 frames/s.
+# Usage: bash scripts/bench_obstacle_detector.sh   (BUILD_DIR=build FRAMES=150 REPEAT=3 CORE=0)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BIN=${BUILD_DIR:-build}/apps
+FRAMES=${FRAMES:-150}
+REPEAT=${REPEAT:-3}
+CORE=${CORE:-0}
+PY=.venv/bin/python
+for app in obstacle_detector simulate fit_bias bag_info; do
+  [ -x "$BIN/$app" ] || { echo "bench_obstacle_detector: $BIN/$app not built" >&2; exit 1; }
+done
+[ -x "$PY" ] || { echo "bench_obstacle_detector: $PY missing (bash scripts/setup.sh)" >&2; exit 1; }
+OUT=$(mktemp -d /tmp/bench_obstacle_detector.XXXXXX)
+trap 'rm -rf "$OUT"' EXIT
+
+sed -e 's/presets: \[HA, HD\]/presets: [HD]/' -e "s/frames: 30/frames: $FRAMES/" \
+  config/protocol_obstacles.yaml > "$OUT/protocol.yaml"
+sed -i "s|^sensor: .*|sensor: $PWD/config/sensor_calibrated.yaml|" "$OUT/protocol.yaml"
+"$BIN/simulate" --protocol "$OUT/protocol.yaml" --out-dir "$OUT/bags" > /dev/null
+BAG=$(ls "$OUT"/bags/*.bag)
+"$BIN/fit_bias" --in config/data/paper_d455_outdoor.csv --out "$OUT/w.yaml" > /dev/null
+
+cat > "$OUT/playback.py" <<'PY'
+import sys, time
+import numpy as np
+import pyrealsense2 as rs
+path, expected = sys.argv[1], int(sys.argv[2])
+ctx = rs.context()
+dev = ctx.load_device(path)
+pb = dev.as_playback()
+pb.set_real_time(False)
+sensor = dev.first_depth_sensor()
+prof = [p for p in sensor.get_stream_profiles() if p.stream_type() == rs.stream.depth][0]
+done, total = [], [0]
+def on_frame(f):
+    total[0] += int(np.asanyarray(f.get_data())[360, 640])
+    done.append(time.perf_counter())
+sensor.open(prof)
+sensor.start(on_frame)
+deadline = time.time() + 600
+while len(done) < expected and time.time() < deadline:
+    time.sleep(0.001)
+sensor.stop()
+sensor.close()
+print(len(done))
+PY
+
+best() { sort -g | head -1; }
+# Wall seconds of a command pinned to one core (the whole process).
+timed() {
+  /usr/bin/time -f "%e" -o "$OUT/time.txt" taskset -c "$CORE" "$@" > "$OUT/stdout.txt"
+  cat "$OUT/time.txt"
+}
+run() { for _ in $(seq "$REPEAT"); do timed "$@"; done | best; }
+
+det_s=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" \
+          --config config/obstacle_detector.yaml --out "$OUT/d.jsonl" "$BAG")
+lines=$(wc -l < "$OUT/d.jsonl")
+obst=$(grep -o '"zone"' "$OUT/d.jsonl" | wc -l)
+read_s=$(run "$BIN/bag_info" --read-all "$BAG")
+play_s=$(run "$PY" "$OUT/playback.py" "$BAG" "$FRAMES")
+played=$(cat "$OUT/stdout.txt")
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
+     "load $(cut -d' ' -f1-3 /proc/loadavg); one core (taskset -c $CORE), best of $REPEAT"
+echo "recording: $FRAMES frames 1280x720, $(du -m "$BAG" | cut -f1) MB; detector found" \
+     "$(echo "$obst / $lines" | bc -l | xargs printf '%.1f') obstacles per frame"
+printf '%-58s %8s %12s %12s\n' "case (whole process)" "wall_s" "measured" "target"
+printf '%-58s %8.2f %8.1f f/s %12s\n' "obstacle_detector (read, detect, correct, JSONL)" \
+  "$det_s" "$(echo "$lines / $det_s" | bc -l)" ">= 30 f/s"
+printf '%-58s %8.2f %8.1f f/s\n' "peer: librealsense playback alone (pyrealsense2)" \
+  "$play_s" "$(echo "$played / $play_s" | bc -l)"
+printf '%-58s %8.2f %8.1f f/s\n' "peer: depthbias BagReader alone (bag_info --read-all)" \
+  "$read_s" "$(echo "$FRAMES / $read_s" | bc -l)"

@@ -1,0 +1,228 @@
+// The detector on frames the simulator renders: people found where they stand, ground found
+// whatever the camera's height and pitch, clusters that stay whole at 15 m and apart from a bush
+// beside them, the corrected range being the bias model's, zones from the stopping distance.
+#include "detect/detector.h"
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+
+#include "detect/json.h"
+#include "scene_fixture.h"
+
+namespace depthbias::detect {
+namespace {
+
+using testing::Bush;
+using testing::Person;
+
+const DetectedObstacle* Near(const FrameDetections& d, double range_m, double azimuth_deg) {
+  const DetectedObstacle* best = nullptr;
+  double best_gap = 0.6;  // lateral [m]
+  for (const auto& o : d.obstacles) {
+    const double gap = std::fabs(o.azimuth_deg - azimuth_deg) * M_PI / 180.0 * range_m;
+    if (gap < best_gap && std::fabs(o.range_m - range_m) < 1.0) {
+      best_gap = gap;
+      best = &o;
+    }
+  }
+  return best;
+}
+
+int CountNear(const FrameDetections& d, double range_m, double azimuth_deg, double lateral_m) {
+  int n = 0;
+  for (const auto& o : d.obstacles) {
+    const double gap = std::fabs(o.azimuth_deg - azimuth_deg) * M_PI / 180.0 * range_m;
+    n += gap < lateral_m && std::fabs(o.range_m - range_m) < 1.5;
+  }
+  return n;
+}
+
+TEST(ObstacleDetector, FindsPeopleAndGroundOfAnUnbiasedCamera) {
+  const auto p = testing::Scene({Person(4, -20), Person(8, 5), Person(12, 25), Bush(6, 20)});
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{}, bias.Scenario("daylight", "HD"));
+  const auto frames = testing::Render(p, 3);
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const FrameDetections d = detector.Detect(frames[k], k);
+    ASSERT_TRUE(d.success) << d.message;
+    EXPECT_EQ(d.frame, k);
+    EXPECT_TRUE(d.ground_found);
+    // Ground 1 m below the camera, normal up (−y).
+    EXPECT_NEAR(d.ground[1], -1.0, 0.01);
+    EXPECT_NEAR(d.ground[3], 1.0, 0.03);
+    for (const auto& [range, azimuth] : std::vector<std::pair<double, double>>{
+             {4, -20}, {8, 5}, {12, 25}}) {
+      const DetectedObstacle* o = Near(d, range, azimuth);
+      ASSERT_NE(o, nullptr) << range << " m";
+      // The median range of a 0.5 × 1.75 m front lies a little beyond its centre.
+      EXPECT_NEAR(o->range_m, range, 0.01 + 0.01 * range) << range << " m";
+      EXPECT_NEAR(o->azimuth_deg, azimuth, 0.5);
+      EXPECT_NEAR(o->height_m, 1.75 - 0.12, 0.2);  // the ground band is removed
+      EXPECT_GT(o->points, 50);
+    }
+    EXPECT_NE(Near(d, 6, 20), nullptr);  // the bush
+    EXPECT_EQ(d.obstacles.size(), 4u);
+    for (size_t i = 1; i < d.obstacles.size(); ++i)
+      EXPECT_LE(d.obstacles[i - 1].range_m, d.obstacles[i].range_m);  // nearest first
+  }
+}
+
+TEST(ObstacleDetector, CameraHeightAndPitchAreFree) {
+  for (const auto& [height, pitch] : std::vector<std::pair<double, double>>{{1.5, 8}, {0.7, -4}}) {
+    const auto p = testing::Scene({Person(6, 0), Person(10, -15)}, {}, height, pitch);
+    const model::BiasModel bias(testing::Weights(0.0, 1.0));
+    ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{},
+                              bias.Scenario("daylight", "HD"));
+    const FrameDetections d = detector.Detect(testing::Render(p, 1)[0], 0);
+    ASSERT_TRUE(d.ground_found) << height << " m, " << pitch << " deg";
+    EXPECT_NEAR(d.ground[3], height, 0.05);
+    const double tilt_deg = std::acos(-d.ground[1]) * 180.0 / M_PI;
+    EXPECT_NEAR(tilt_deg, std::fabs(pitch), 0.7);
+    // Ranges are to the face's centre in 3-D, whatever the pitch.
+    ASSERT_NE(Near(d, 6, 0), nullptr) << height << " m, " << pitch << " deg";
+    ASSERT_NE(Near(d, 10, -15), nullptr) << height << " m, " << pitch << " deg";
+    EXPECT_EQ(d.obstacles.size(), 2u);
+  }
+}
+
+// Stereo noise at 15 m is ~0.3 m per pixel: the tolerance grows with range, so a person there
+// is one cluster, and a bush half a metre beside a person at 13 m is another.
+TEST(ObstacleDetector, ToleranceGrowsWithRangeYetKeepsNeighboursApart) {
+  const auto p = testing::Scene({Person(15, 10), Person(13, -21), Bush(13, -15.5)});
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{}, bias.Scenario("daylight", "HD"));
+  for (const auto& frame : testing::Render(p, 5)) {
+    const FrameDetections d = detector.Detect(frame, 0);
+    EXPECT_EQ(CountNear(d, 15, 10, 1.5), 1);
+    EXPECT_EQ(CountNear(d, 13, -21, 0.6), 1);
+    EXPECT_EQ(CountNear(d, 13, -15.5, 0.6), 1);
+  }
+  // A fixed tolerance of 5 cm breaks the far person apart.
+  DetectorParams fixed;
+  fixed.cluster.base_tolerance_m = 0.05;
+  fixed.cluster.noise_k = 0.0;
+  fixed.cluster.min_points = 1;
+  fixed.obstacle.min_points = 1;
+  fixed.obstacle.min_height_m = 0.0;
+  ObstacleDetector brittle(p.sensor.intrinsics, fixed, bias.Scenario("daylight", "HD"));
+  EXPECT_GT(CountNear(brittle.Detect(testing::Render(p, 1)[0], 0), 15, 10, 1.5), 1);
+}
+
+// The corrected range is the bias model's own (ScenarioModel::CorrectedM at the cluster's
+// median depth and off-axis angle), and with the unit's disparity offset it lands on the truth.
+TEST(ObstacleDetector, CorrectedRangeIsTheModelsAndRemovesAKnownOffset) {
+  const double delta_px = -0.25;  // far targets read farther
+  const auto p = testing::Scene({Person(5, -10), Person(9, 20), Person(14, 0)},
+                                {{"disparity_offset", {{"delta_px", delta_px}}}});
+  const model::BiasModel bias(testing::Weights(delta_px, 1.0));
+  const model::ScenarioModel& s = bias.Scenario("daylight", "HD");
+  DetectorParams params;
+  params.k = 2.5;
+  ObstacleDetector detector(p.sensor.intrinsics, params, s);
+  const FrameDetections d = detector.Detect(testing::Render(p, 1)[0], 0);
+  for (const auto& [range, azimuth] : std::vector<std::pair<double, double>>{
+           {5, -10}, {9, 20}, {14, 0}}) {
+    const DetectedObstacle* o = Near(d, range + 0.8, azimuth);
+    ASSERT_NE(o, nullptr) << range;
+    EXPECT_DOUBLE_EQ(o->corrected_range_m, s.CorrectedM(o->depth_m, o->off_axis_deg));
+    EXPECT_GT(o->range_m - range, 0.6 * 0.25 * range * range / 60.8) << range;  // raw: farther
+    EXPECT_NEAR(o->corrected_range_m, range, 0.05) << range;
+    EXPECT_GE(o->std_m, s.PredictiveStdM(o->depth_m, o->off_axis_deg));
+    EXPECT_DOUBLE_EQ(o->safe_range_m, o->corrected_range_m - 2.5 * o->std_m);
+  }
+  ASSERT_EQ(d.obstacles.size(), 3u);
+  EXPECT_LT(d.obstacles[0].std_m, d.obstacles[2].std_m);  // σ grows with range
+}
+
+TEST(ObstacleDetector, SameFrameSameDetections) {
+  const auto p = testing::Scene({Person(7, 0), Bush(9, 15)});
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{}, bias.Scenario("daylight", "HD"));
+  const auto frame = testing::Render(p, 1)[0];
+  EXPECT_EQ(FormatJsonLine(detector.Detect(frame, 4)), FormatJsonLine(detector.Detect(frame, 4)));
+}
+
+TEST(ObstacleDetector, RefusesBadParametersAndFramesOfAnotherSize) {
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  const auto& s = bias.Scenario("daylight", "HD");
+  DetectorParams bad;
+  bad.voxel.leaf_m = 0;
+  EXPECT_THROW(ObstacleDetector(camera::D455::DepthIntrinsics(), bad, s), std::invalid_argument);
+  bad = DetectorParams{};
+  bad.zones.decel_mps2 = 0;
+  EXPECT_THROW(ObstacleDetector(camera::D455::DepthIntrinsics(), bad, s), std::invalid_argument);
+  ObstacleDetector detector(camera::D455::DepthIntrinsics(), DetectorParams{}, s);
+  records::DepthFrame small;
+  small.width = 640;
+  small.height = 360;
+  small.counts.assign(640 * 360, 1000);
+  const FrameDetections d = detector.Detect(small, 0);
+  EXPECT_FALSE(d.success);
+  EXPECT_NE(d.message.find("640x360"), std::string::npos) << d.message;
+  // An empty frame is a frame without obstacles.
+  records::DepthFrame empty;
+  empty.width = 1280;
+  empty.height = 720;
+  empty.counts.assign(1280 * 720, 0);
+  const FrameDetections none = detector.Detect(empty, 1);
+  EXPECT_TRUE(none.success);
+  EXPECT_TRUE(none.obstacles.empty());
+}
+
+TEST(Zones, StoppingDistanceAndZones) {
+  ZoneParams z;
+  z.speed_mps = 3.0;
+  z.reaction_s = 0.4;
+  z.decel_mps2 = 2.0;
+  z.clearance_m = 0.5;
+  z.slow_margin_m = 2.0;
+  const double s = 3.0 * 0.4 + 9.0 / 4.0 + 0.5;  // v·T + v²/(2a) + C
+  EXPECT_DOUBLE_EQ(z.StoppingDistanceM(), s);
+  EXPECT_EQ(ZoneFor(s - 0.01, z), Zone::kStop);
+  EXPECT_EQ(ZoneFor(s, z), Zone::kStop);
+  EXPECT_EQ(ZoneFor(s + 1.0, z), Zone::kSlow);
+  EXPECT_EQ(ZoneFor(s + 2.0, z), Zone::kSlow);
+  EXPECT_EQ(ZoneFor(s + 2.01, z), Zone::kClear);
+  EXPECT_EQ(ZoneFor(std::nan(""), z), Zone::kStop);
+  EXPECT_EQ(ZoneName(Zone::kSlow), "slow");
+}
+
+TEST(JsonLine, HoldsTheFieldsOfDesignMd) {
+  FrameDetections d;
+  d.frame = 12;
+  d.timestamp_s = 0.4;
+  DetectedObstacle o;
+  o.centroid_m = {1.0, 0.1, 7.0};
+  o.azimuth_deg = 8.13;
+  o.range_m = 7.1;
+  o.corrected_range_m = 7.0;
+  o.std_m = 0.2;
+  o.safe_range_m = 6.6;
+  o.zone = Zone::kClear;
+  o.points = 321;
+  d.obstacles = {o, o};
+  d.obstacles[1].std_m = std::nan("");
+  const std::string line = FormatJsonLine(d);
+  ASSERT_EQ(line.back(), '\n');
+  EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1);
+  const YAML::Node n = YAML::Load(line);
+  EXPECT_EQ(n["frame"].as<int>(), 12);
+  EXPECT_DOUBLE_EQ(n["timestamp_s"].as<double>(), 0.4);
+  ASSERT_EQ(n["obstacles"].size(), 2u);
+  const YAML::Node a = n["obstacles"][0];
+  EXPECT_EQ(a.size(), 8u);
+  EXPECT_DOUBLE_EQ(a["centroid_m"][2].as<double>(), 7.0);
+  EXPECT_DOUBLE_EQ(a["azimuth_deg"].as<double>(), 8.13);
+  EXPECT_DOUBLE_EQ(a["range_m"].as<double>(), 7.1);
+  EXPECT_DOUBLE_EQ(a["corrected_range_m"].as<double>(), 7.0);
+  EXPECT_DOUBLE_EQ(a["std_m"].as<double>(), 0.2);
+  EXPECT_DOUBLE_EQ(a["safe_range_m"].as<double>(), 6.6);
+  EXPECT_EQ(a["zone"].as<std::string>(), "clear");
+  EXPECT_EQ(a["points"].as<int>(), 321);
+  EXPECT_NE(line.find("\"std_m\": null"), std::string::npos) << line;  // not NaN: JSON has none
+}
+
+}  // namespace
+}  // namespace depthbias::detect
