@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # The installed package as another project sees it:
-#   1. installs BUILD_DIR (cmake --install) into a fresh prefix, BUILD_DIR/consumer-test/prefix;
-#   2. checks that no installed file names the source or build tree (the prefix is relocatable);
+#   1. installs BUILD_DIR into a fresh prefix: cmake --install (BUILD_DIR/consumer-test/prefix),
+#      or with --deb the Debian packages cpack -G DEB makes, unpacked (BUILD_DIR/consumer-deb/);
+#   2. checks that no installed file names the source or build tree (the prefix is relocatable)
+#      and, with --deb, that both packages declare their Debian dependencies;
 #   3. builds tests/consumer/ against that prefix alone (find_package(depthbias)): the consumer
 #      program and one translation unit per installed header, each header included on its own;
 #   4. fits weights with the installed fit_bias, runs the consumer on a fixture bag, and checks the
 #      corrected range it prints against the installed correct_depth's for the same depth and
 #      off-axis angle (two paths through model::BiasModel that must agree).
-#   bash scripts/test_consumer.sh BUILD_DIR          (ctest runs it: label "package")
+#   bash scripts/test_consumer.sh BUILD_DIR [--deb]      (ctest runs both: label "package")
 # Every failing step says which, on one line, and the script exits non-zero.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -15,19 +17,44 @@ fail() {
   echo "test_consumer: $*" >&2
   exit 1
 }
-[ $# -eq 1 ] || fail "usage: scripts/test_consumer.sh BUILD_DIR"
+[ $# -ge 1 ] && [ $# -le 2 ] || fail "usage: scripts/test_consumer.sh BUILD_DIR [--deb]"
 [ -f "$1/CMakeCache.txt" ] || fail "$1 is not a configured build directory"
 BUILD=$(cd "$1" && pwd)
+DEB=0
+if [ $# -eq 2 ]; then
+  [ "$2" = "--deb" ] || fail "unknown argument '$2' (usage: test_consumer.sh BUILD_DIR [--deb])"
+  DEB=1
+fi
 # A fixed place under the build directory, emptied first: the consumer's compilations then hit
 # ccache from one run to the next.
-WORK=$BUILD/consumer-test
-PREFIX=$WORK/prefix
+if [ $DEB -eq 1 ]; then WORK=$BUILD/consumer-deb; else WORK=$BUILD/consumer-test; fi
 rm -rf "$WORK"
 mkdir -p "$WORK"
 
 # 1. Install.
-cmake --install "$BUILD" --prefix "$PREFIX" >"$WORK/install.log" 2>&1 ||
-  fail "cmake --install $BUILD failed, see $WORK/install.log"
+if [ $DEB -eq 1 ]; then
+  command -v dpkg-deb >/dev/null 2>&1 || fail "dpkg-deb not found (Debian's dpkg)"
+  cpack --config "$BUILD/CPackConfig.cmake" -G DEB -B "$WORK/cpack" >"$WORK/cpack.log" 2>&1 ||
+    fail "cpack -G DEB failed, see $WORK/cpack.log"
+  for package in depthbias depthbias-dev; do
+    deb=$(ls "$WORK/cpack/${package}_"*.deb 2>/dev/null | head -1)
+    [ -n "$deb" ] || fail "cpack made no ${package}_*.deb, see $WORK/cpack.log"
+    dpkg-deb -x "$deb" "$WORK/root" || fail "dpkg-deb -x $deb failed"
+    depends=$(dpkg-deb -f "$deb" Depends)
+    case $package in
+      depthbias) want="libpcl-common" ;;  # dpkg-shlibdeps found the tools' runtime libraries
+      depthbias-dev) want="libpcl-dev" ;;
+    esac
+    [[ "$depends" == *"$want"* ]] || fail "$deb: Depends lacks $want: '$depends'"
+    echo "test_consumer: $(basename "$deb"): $(stat -c %s "$deb") bytes," \
+      "$(dpkg-deb -c "$deb" | grep -vc '/$') files"
+  done
+  PREFIX=$WORK/root/usr
+else
+  PREFIX=$WORK/prefix
+  cmake --install "$BUILD" --prefix "$PREFIX" >"$WORK/install.log" 2>&1 ||
+    fail "cmake --install $BUILD failed, see $WORK/install.log"
+fi
 [ -f "$PREFIX/lib/cmake/depthbias/depthbiasConfig.cmake" ] ||
   fail "no lib/cmake/depthbias/depthbiasConfig.cmake in the installed tree"
 
@@ -44,16 +71,25 @@ if command -v ccache >/dev/null 2>&1; then
   export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$ROOT}
   LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
+# The headers of the packages are the files cmake --install puts: checked once, without --deb.
+CHECK_HEADERS=ON
+[ $DEB -eq 1 ] && CHECK_HEADERS=OFF
 cmake -S "$ROOT/tests/consumer" -B "$WORK/build" "${GENERATOR[@]}" "${LAUNCHER[@]}" \
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$PREFIX" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF \
-    >"$WORK/configure.log" 2>&1 ||
+    -DCHECK_HEADERS=$CHECK_HEADERS >"$WORK/configure.log" 2>&1 ||
   fail "configuring tests/consumer against $PREFIX failed, see $WORK/configure.log"
-grep -q "depthbias headers to check:" "$WORK/configure.log" ||
-  fail "tests/consumer found no installed headers to check"
+if [ $CHECK_HEADERS = ON ]; then
+  grep -q "depthbias headers to check:" "$WORK/configure.log" ||
+    fail "tests/consumer found no installed headers to check"
+fi
 cmake --build "$WORK/build" -j "${JOBS:-2}" >"$WORK/build.log" 2>&1 ||
   fail "building tests/consumer (consumer or a header on its own) failed, see $WORK/build.log"
-echo "test_consumer: consumer built; $(grep -o 'depthbias headers to check: [0-9]*' \
-  "$WORK/configure.log" | grep -o '[0-9]*$') installed headers compile on their own"
+if [ $CHECK_HEADERS = ON ]; then
+  echo "test_consumer: consumer built; $(grep -o 'depthbias headers to check: [0-9]*' \
+    "$WORK/configure.log" | grep -o '[0-9]*$') installed headers compile on their own"
+else
+  echo "test_consumer: consumer built against the unpacked packages"
+fi
 
 # 4. Run it.
 BIN=$PREFIX/bin
