@@ -1,6 +1,7 @@
 #pragma once
 // One depth image as the camera delivers it: 16-bit depth counts, scaled by depth units.
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
