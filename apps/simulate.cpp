@@ -19,7 +19,6 @@
 #include "io/metrics_csv.h"
 #include "io/temp_files.h"
 #include "io/yaml_limits.h"
-#include "records/number_text.h"
 #include "sim/calibrate.h"
 #include "sim/config_yaml.h"
 #include "sim/render_protocol.h"
@@ -65,34 +64,22 @@ std::string BagPath(const std::string& dir, const sim::Cell& cell) {
   return (fs::path(dir) / (cell.name + ".bag")).string();
 }
 
-// Before any work: the bags and the manifest of --out-dir are new outputs (none an input, no
-// two the same: duplicate distances in a protocol name two recordings alike), the folder is
-// writable and has room for them.
+// Before any work: the bags (and their .part) and the manifest of --out-dir are new outputs
+// (none an input, no two alike: duplicate distances in a protocol name two recordings alike),
+// the folder is writable and has room for them.
 void CheckRecordings(const sim::SimParams& params, const std::string& dir,
                      const std::vector<std::string>& inputs) {
-  io::CheckOutputFolder(dir);
-  std::vector<std::string> outputs = {(fs::path(dir) / "manifest.csv").string()};
+  std::vector<std::string> names = {"manifest.csv"};
   const std::vector<sim::Cell> cells = sim::MakeCells(params.protocol);
   for (const sim::Cell& cell : cells) {
-    outputs.push_back(BagPath(dir, cell));
-    outputs.push_back(BagPath(dir, cell) + ".part");
-  }
-  io::CheckOutputs(outputs, inputs);
-  for (const std::string& out : outputs) {
-    std::error_code ec;
-    if (fs::exists(out, ec) && !fs::is_regular_file(out, ec))
-      throw Fail(out + ": exists and is not a regular file; a recording is never written over it");
+    names.push_back(cell.name + ".bag");
+    names.push_back(cell.name + ".bag.part");
   }
   const auto& in = params.sensor.intrinsics;
-  const double bytes = static_cast<double>(cells.size()) *
-                       (static_cast<double>(params.protocol.frames) *
-                            (2.0 * in.width * in.height + 2048.0) + 65536.0);
-  const std::int64_t free_bytes = io::FreeBytes(dir);
-  if (free_bytes >= 0 && bytes > static_cast<double>(free_bytes))
-    throw Fail(dir + ": " + std::to_string(cells.size()) + " recordings of " +
-               std::to_string(params.protocol.frames) + " frames need about " +
-               records::BytesText(bytes) + ", " +
-               records::BytesText(static_cast<double>(free_bytes)) + " are free there");
+  const double frame_bytes = 2.0 * in.width * in.height + 2048.0;  // pixels and message
+  io::CheckOutputSet(dir, names, inputs,
+                     static_cast<double>(cells.size()) *
+                         (params.protocol.frames * frame_bytes + 65536.0));
 }
 
 // Every recording of the protocol as a bag in dir, then DIR/manifest.csv with each recording's

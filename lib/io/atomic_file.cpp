@@ -286,6 +286,24 @@ void CheckOutputFolder(const std::string& dir) {
   ProbeFolder(ExistingFolder(dir), dir);
 }
 
+void CheckOutputSet(const std::string& dir, const std::vector<std::string>& names,
+                    const std::vector<std::string>& inputs, double bytes) {
+  CheckOutputFolder(dir);
+  std::vector<std::string> outputs;
+  for (const std::string& n : names) outputs.push_back((std::filesystem::path(dir) / n).string());
+  CheckOutputs(outputs, inputs);
+  for (const std::string& out : outputs) {
+    struct stat st {};
+    if (::stat(out.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      throw IoError(out + ": exists and is not a regular file; an output is never written over it");
+  }
+  const std::int64_t free_bytes = FreeBytes(dir);
+  if (free_bytes >= 0 && bytes > static_cast<double>(free_bytes))
+    throw IoError(dir + ": the outputs need about " +
+                  records::BytesText(bytes) + ", " +
+                  records::BytesText(static_cast<double>(free_bytes)) + " are free there");
+}
+
 std::int64_t FreeBytes(const std::string& dir) {
   struct statvfs s {};
   if (::statvfs(ExistingFolder(dir).c_str(), &s) != 0) return -1;

@@ -39,6 +39,11 @@ void CheckOutputFile(const std::string& path);
 // The same for an output folder: the folder, or the nearest existing folder above it, must be
 // writable; an existing non-folder is refused.
 void CheckOutputFolder(const std::string& dir);
+// Before a run that writes the files `names` into folder `dir`, about `bytes` in all: the folder
+// is writable (or can be made), no file is an input or given twice, none exists as anything but
+// a regular file, and the file system has room. Throws IoError naming what is wrong.
+void CheckOutputSet(const std::string& dir, const std::vector<std::string>& names,
+                    const std::vector<std::string>& inputs, double bytes);
 // Bytes free for an unprivileged writer in the file system holding `dir` (or the nearest
 // existing folder above it); -1 if unknown.
 std::int64_t FreeBytes(const std::string& dir);
