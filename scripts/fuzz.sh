@@ -59,9 +59,9 @@ for t in "${TARGETS[@]}"; do
   "$bin" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len=$max_len \
       -print_final_stats=1 -artifact_prefix="$ART/$t-" "$scratch" "$corpus" >"$log" 2>&1
   rc=$?
-  runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  runs=$(grep -o 'stat::number_of_executed_units:[[:space:]]*[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
   secs=$(grep -o 'Done [0-9]* runs in [0-9]* second' "$log" | grep -o 'in [0-9]*' | grep -o '[0-9]*')
-  new=$(grep -o 'stat::new_units_added: [0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  new=$(grep -o 'stat::new_units_added:[[:space:]]*[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
   cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*')
   if [ $rc -eq 0 ]; then
     echo "fuzz_$t: ${runs:-?} executions in ${secs:-?} s, coverage ${cov:-?} edges, ${new:-0} new inputs, 0 findings"

@@ -22,6 +22,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 
 #include "io/bag.h"
 
@@ -73,7 +74,11 @@ class GuardedBag {
   void Open(const std::string& path, std::uint32_t mode) {
     std::lock_guard<std::mutex> lock(RosbagLock());
     bag_->open(path, mode);
-    if (mode & (rosbag::bagmode::Write | rosbag::bagmode::Append)) fd_ = FindDescriptor(path);
+    if (mode & (rosbag::bagmode::Write | rosbag::bagmode::Append)) {
+      fd_ = FindDescriptor(path);
+      struct stat st {};
+      if (fd_ >= 0 && ::fstat(fd_, &st) == 0) file_id_ = {st.st_dev, st.st_ino};
+    }
   }
   // Throws what rosbag threw; the bag is closed either way.
   void Close() {
@@ -96,27 +101,35 @@ class GuardedBag {
     }
   }
   // After a failed close: the rest of rosbag's writes go to /dev/null so that its close ends.
+  // Only while the descriptor is still the bag's own (rosbag closes it only once its writes
+  // succeeded; were it closed and reused, it must not be touched).
   void Abandon() {
-    if (fd_ >= 0) {
+    const int fd = fd_;
+    fd_ = -1;
+    struct stat st {};
+    const bool own = fd >= 0 && ::fstat(fd, &st) == 0 && st.st_dev == file_id_.first &&
+                     st.st_ino == file_id_.second;
+    if (own) {
       const int null_fd = ::open("/dev/null", O_WRONLY);
       if (null_fd >= 0) {
-        ::dup2(null_fd, fd_);
+        ::dup2(null_fd, fd);
         ::close(null_fd);
+        try {
+          bag_->close();
+          return;
+        } catch (...) {
+        }
       }
-      fd_ = -1;
     }
-    try {
-      bag_->close();
-    } catch (...) {
-      // Still failing (its descriptor was not found): the object is given up unfreed rather
-      // than destroyed, since its destructor would throw again. Its file is removed by the
-      // caller; the descriptor stays open until the process ends.
-      (void)bag_.release();
-    }
+    // Still failing, or its descriptor unknown: the object is given up unfreed rather than
+    // destroyed, since its destructor would close (and throw) again. Its file is removed by the
+    // caller; the descriptor stays open until the process ends.
+    (void)bag_.release();
   }
 
   std::unique_ptr<rosbag::Bag> bag_;
   int fd_ = -1;  // the written bag's descriptor, for Abandon
+  std::pair<dev_t, ino_t> file_id_{0, 0};
 };
 
 }  // namespace depthbias::io::bag_detail
