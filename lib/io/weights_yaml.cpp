@@ -284,7 +284,9 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
       for (size_t k = 0; k < cn.size(); ++k) {
         g.covariance.push_back(r.Doubles(cn[k], p + ".covariance[" + std::to_string(k) + "]"));
       }
-      CheckCovariance(r, g.covariance, g.values.size(), p + ".covariance");
+      // An empty list is what the writer gives for an unknown covariance.
+      if (!g.covariance.empty())
+        CheckCovariance(r, g.covariance, g.values.size(), p + ".covariance");
     }
     w.groups.push_back(std::move(g));
   }

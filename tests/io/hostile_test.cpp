@@ -578,6 +578,10 @@ std::string Diagonal(const std::vector<std::string>& d, const std::string& off =
 TEST(HostileNumbers, WeightsWhoseMarginWouldShrinkAreRefused) {
   const std::vector<std::string> ok(6, "0.01");
   EXPECT_EQ(IoErrorOf([&] { ParseWeightsYaml(WeightsWith("0.5", Diagonal(ok)), "w.yaml"); }), "");
+  // An unknown covariance is written as an empty list and reads back (found by fuzz_weights_yaml:
+  // the range checks first refused it, so a fit without covariance could not be read).
+  EXPECT_EQ(IoErrorOf([&] { ParseWeightsYaml(WeightsWith("0.5", "    covariance: []\n"), "w.yaml"); }),
+            "");
   // NaN scatter: unknown (n <= p), read, and the model then claims no margin (see apps test).
   EXPECT_EQ(IoErrorOf([&] { ParseWeightsYaml(WeightsWith(".nan", ""), "w.yaml"); }), "");
   struct Case {
