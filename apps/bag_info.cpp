@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "args.h"
 #include "io/bag.h"
 #include "io/bag_summary.h"
 
@@ -18,14 +19,17 @@ namespace {
 
 void Usage(std::ostream& out) {
   out << "usage: bag_info FILE... [--json] [--read-all] [--partial]\n"
-               "  --json      one JSON object per bag, one per line\n"
-               "  --partial   read a damaged bag up to the damage\n"
-               "  --read-all  decode every depth frame and print frames/s\n";
+         "What a RealSense bag holds. Options (default: all off):\n"
+         "  --json      one JSON object per bag, one per line\n"
+         "  --partial   read a damaged bag up to the damage\n"
+         "  --read-all  decode every depth frame and print frames/s\n"
+      << depthbias::apps::kExitHelp;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  depthbias::io::PrepareRosEnvironment();
   bool json = false, read_all = false, partial = false;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
@@ -41,16 +45,16 @@ int main(int argc, char** argv) {
       return 0;
     } else if (a.size() > 1 && a[0] == '-') {
       std::cerr << "bag_info: unknown option " << a << " (see bag_info --help)\n";
-      return 2;
+      return depthbias::apps::kExitError;
     } else {
       files.push_back(a);
     }
   }
   if (files.empty()) {
     std::cerr << "bag_info: no FILE given (see bag_info --help)\n";
-    return 2;
+    return depthbias::apps::kExitError;
   }
-  int failures = 0;
+  std::size_t failures = 0;
   for (const std::string& file : files) {
     try {
       const auto start = std::chrono::steady_clock::now();
@@ -84,15 +88,26 @@ int main(int argc, char** argv) {
                       static_cast<unsigned long long>(checksum));
         if (files.size() > 1) std::cout << "\n";
       }
-    } catch (const depthbias::io::BagError& e) {
+    } catch (const std::exception& e) {
       ++failures;
+      const std::string what = dynamic_cast<const depthbias::io::BagError*>(&e)
+                                   ? e.what()
+                                   : file + ": " + (dynamic_cast<const std::bad_alloc*>(&e)
+                                                        ? "out of memory while reading it"
+                                                        : e.what());
       if (json) {
-        std::cout << depthbias::io::BagErrorJson(file, e.what()) << "\n";
+        std::cout << depthbias::io::BagErrorJson(file, what) << "\n";
       } else {
-        std::cerr << "bag_info: " << e.what() << "\n";
+        std::cerr << "bag_info: " << what << "\n";
       }
     }
   }
   std::cout.flush();
-  return failures == 0 ? 0 : 1;
+  if (files.size() > 1)
+    std::cerr << "bag_info: "
+              << depthbias::apps::Summary(files.size(), "bag",
+                                          {{"ok", files.size() - failures}, {"unreadable", failures}},
+                                          "")
+              << "\n";
+  return failures == 0 ? depthbias::apps::kExitOk : depthbias::apps::kExitRowsFailed;
 }

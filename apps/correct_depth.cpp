@@ -1,9 +1,9 @@
 // correct_depth: applies a fitted bias model to a panel-metrics CSV.
-//   correct_depth --weights w.yaml --in metrics.csv --out corrected.csv [--k 2]
 // Adds per row: predicted_bias_m = b(Z, α) at Z = median_m, α = angle_deg; corrected_m = Z − b;
 // predictive_std_m; margin_m = corrected_m − k·predictive_std_m (safe distance); residual_m =
 // corrected_m − distance_m. Rows whose status is not ok get empty cells.
 #include <iostream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -11,6 +11,7 @@
 #include "io/atomic_file.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
+#include "io/temp_files.h"
 #include "io/weights_yaml.h"
 #include "model/bias_model.h"
 
@@ -20,54 +21,55 @@ constexpr char kUsage[] =
     "usage: correct_depth --weights weights.yaml --in metrics.csv --out corrected.csv [--k 2]\n"
     "Adds per row predicted_bias_m, corrected_m, predictive_std_m, margin_m (corrected_m minus\n"
     "k predictive standard deviations: a distance the target is not nearer than) and\n"
-    "residual_m (corrected_m minus distance_m).\n";
+    "residual_m (corrected_m minus distance_m). Rows not ok, and rows whose margin is unknown\n"
+    "(a group fitted with no degree of freedom left), get empty cells. Options (default):\n"
+    "  --weights FILE   weights YAML of fit_bias (required)\n"
+    "  --in FILE        panel-metrics CSV (required)\n"
+    "  --out FILE       corrected CSV (required)\n"
+    "  --k K            standard deviations of the margin, >= 0 (2)\n";
 
 int Fail(const std::string& what) {
   std::cerr << "correct_depth: " << what << "\n";
-  return 1;
+  return depthbias::apps::kExitError;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace depthbias;
+  io::InstallSignalCleanup();
   std::string weights_path, in, out;
   double k = 2.0;
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) {
-        std::cout << kUsage;
-        return 0;
-      }
+      if (args.IsHelp()) return std::cout << kUsage << apps::kExitHelp, apps::kExitOk;
       if (a == "--weights") weights_path = args.Value();
       else if (a == "--in") in = args.Value();
       else if (a == "--out") out = args.Value();
       // k standard deviations below the corrected distance: finite and >= 0, or the margin
       // would not be a distance the target is not nearer than.
       else if (a == "--k") k = args.Number(false, 0);
-      else throw std::invalid_argument("unknown argument '" + a + "' (see correct_depth --help)");
+      else throw std::invalid_argument("unknown argument '" + a + "'");
     }
+    if (weights_path.empty() || in.empty() || out.empty())
+      throw std::invalid_argument("--weights, --in and --out are required");
   } catch (const std::invalid_argument& e) {
-    return Fail(std::string("bad arguments: ") + e.what());
-  }
-  if (weights_path.empty() || in.empty() || out.empty()) {
-    return Fail("usage: correct_depth --weights w.yaml --in metrics.csv --out corrected.csv");
-  }
-  try {
-    io::CheckOutputs({out}, {in, weights_path});
-  } catch (const io::IoError& e) {
-    return Fail(e.what());
+    return Fail(std::string(e.what()) + " (see correct_depth --help)");
   }
   std::vector<records::PanelMetrics> rows;
   records::BiasWeights weights;
+  std::unique_ptr<model::BiasModel> bias_model;
   try {
+    io::CheckOutputs({out}, {in, weights_path});
+    io::CheckOutputFile(out);
     weights = io::ReadWeightsYaml(weights_path);
     rows = io::ReadMetricsCsv(in);
   } catch (const io::IoError& e) {
     return Fail(e.what());
+  } catch (const std::bad_alloc&) {
+    return Fail(in + ", " + weights_path + ": out of memory while reading them");
   }
-  std::unique_ptr<model::BiasModel> bias_model;
   try {
     bias_model = std::make_unique<model::BiasModel>(weights);
   } catch (const std::exception& e) {
@@ -75,12 +77,13 @@ int main(int argc, char** argv) {
   }
   std::vector<std::string> header = io::MetricsColumns();
   for (const char* c : {"predicted_bias_m", "corrected_m", "predictive_std_m", "margin_m",
-                        "residual_m"}) {
+                        "residual_m"})
     header.push_back(c);
-  }
   std::vector<std::vector<std::string>> cells;
+  std::map<std::string, std::size_t> by_status;
   for (const auto& r : rows) {
     std::vector<std::string> c = io::MetricsCells(r);
+    ++by_status[r.ok() ? "ok" : "not ok"];
     if (!r.ok()) {
       c.insert(c.end(), 5, "");
       cells.push_back(std::move(c));
@@ -104,7 +107,7 @@ int main(int argc, char** argv) {
   } catch (const io::IoError& e) {
     return Fail(e.what());
   }
-  std::cout << "corrected " << rows.size() << " rows with " << weights.model << " → " << out
-            << "\n";
-  return 0;
+  std::cout << "correct_depth: "
+            << apps::Summary(rows.size(), "row", by_status, out) << "\n";
+  return apps::kExitOk;
 }

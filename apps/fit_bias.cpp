@@ -1,11 +1,8 @@
 // fit_bias: panel-metrics CSV → bias model weights YAML (DESIGN.md), and a table on stdout.
-//   fit_bias --in metrics.csv --out weights.yaml [--model disp_knots|disp_tan|disp_scale|paper6]
-//            [--lambda 0.001] [--loss auto|none|huber|cauchy|soft_l1] [--loss-scale 1.0]
-//            [--group-by light,preset] [--cv point,distance|point|distance|none]
-//            [--weight-valid] [--focal-px 640] [--baseline-m 0.095] [--prior name=mean:strength]
-//            [--nested] [--cv-out heldout.csv] [--coverage K] [--margins on|off]
 // --nested also judges the choice of a model out of sample: every form × {none, huber} is a
 // candidate, chosen in each outer fold by inner cross-validation on that fold's training rows.
+#include <glog/logging.h>
+
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -18,6 +15,7 @@
 #include "io/csv.h"
 #include "io/metrics_csv.h"
 #include "io/sha256.h"
+#include "io/temp_files.h"
 #include "io/weights_yaml.h"
 #include "model/fit_groups.h"
 
@@ -26,35 +24,49 @@ namespace {
 using namespace depthbias;
 
 constexpr char kUsage[] =
-    "usage: fit_bias --in metrics.csv --out weights.yaml\n"
-    "         [--model disp_knots|disp_tan|disp_scale|paper6] [--lambda 0.001]\n"
-    "         [--loss auto|none|huber|cauchy|soft_l1] [--loss-scale 1.0]\n"
-    "         [--group-by light,preset] [--cv point,distance|point|distance|none]\n"
-    "         [--weight-valid] [--focal-px 640] [--baseline-m 0.095]\n"
-    "         [--prior name=mean:strength] [--nested] [--cv-out heldout.csv]\n"
-    "         [--coverage K] [--margins on|off]\n"
+    "usage: fit_bias --in metrics.csv --out weights.yaml [options]\n"
     "Fits the bias model per (light, preset) with Ceres and an L2 prior, cross-validated;\n"
-    "writes the weights YAML and prints a table. --nested also judges the choice of model.\n"
-    "--coverage K prints, per distance, the share of held-out truths below corrected - K*sigma.\n"
-    "--margins off: no residual model, no weighting, no near guard (one sigma per scenario).\n";
+    "writes the weights YAML and prints a table. Options (default):\n"
+    "  --in FILE            panel-metrics CSV (required)\n"
+    "  --out FILE           weights YAML (required)\n"
+    "  --model NAME         disp_knots|disp_tan|disp_scale|paper6 (disp_knots)\n"
+    "  --lambda L           L2 prior strength, >= 0 (0.001)\n"
+    "  --loss NAME          auto|none|huber|cauchy|soft_l1 (auto)\n"
+    "  --loss-scale M       where the robust loss departs from the square [m], > 0 (1)\n"
+    "  --group-by KEYS      comma list of light, preset, emitter (light,preset)\n"
+    "  --cv SCHEMES         point,distance|point|distance|none (point,distance)\n"
+    "  --weight-valid       weight rows by their valid pixels (off)\n"
+    "  --focal-px F         f of disparity-space forms [px], > 0 (640)\n"
+    "  --baseline-m B       B of disparity-space forms [m], > 0 (0.095)\n"
+    "  --prior N=MEAN:S     a prior on weight N, strength S >= 0 (none; repeatable)\n"
+    "  --nested             judge the choice of model by nested cross-validation (off)\n"
+    "  --cv-out FILE        held-out error of every row under every scheme (none)\n"
+    "  --coverage K         print, per distance, the share of held-out truths below\n"
+    "                       corrected - K*sigma (off)\n"
+    "  --margins on|off     off: no residual model, no weighting, no near guard (on)\n";
 
 std::vector<std::string> Split(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) {
+  for (std::string item; std::getline(ss, item, ',');)
     if (!item.empty()) out.push_back(item);
-  }
   return out;
 }
 
 int Fail(const std::string& what) {
   std::cerr << "fit_bias: " << what << "\n";
-  return 1;
+  return apps::kExitError;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Ceres logs through glog (22 lines of residual warnings before an error): the tool speaks
+  // for itself, in one line.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  FLAGS_logtostderr = true;
+  google::InitGoogleLogging(argv[0]);
+  io::InstallSignalCleanup();
   std::string in, out, cv_out;
   bool nested = false;
   double coverage_k = -1.0;
@@ -62,19 +74,16 @@ int main(int argc, char** argv) {
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) {
-        std::fputs(kUsage, stdout);
-        return 0;
-      }
+      if (args.IsHelp()) return std::fputs(kUsage, stdout), std::fputs(apps::kExitHelp, stdout), 0;
       auto value = [&] { return args.Value(); };
-      auto number = [&] { return args.Number(false, -apps::kNoLimit); };
+      constexpr double kTiny = 1e-300;
       if (a == "--in") in = value();
       else if (a == "--out") out = value();
       else if (a == "--model") params.fit.model = value();
-      else if (a == "--lambda") params.fit.lambda = number();
-      else if (a == "--loss-scale") params.fit.loss_scale_m = number();
-      else if (a == "--focal-px") params.fit.focal_px = number();
-      else if (a == "--baseline-m") params.fit.baseline_m = number();
+      else if (a == "--lambda") params.fit.lambda = args.Number(false, 0);
+      else if (a == "--loss-scale") params.fit.loss_scale_m = args.Number(false, kTiny);
+      else if (a == "--focal-px") params.fit.focal_px = args.Number(false, kTiny);
+      else if (a == "--baseline-m") params.fit.baseline_m = args.Number(false, kTiny);
       else if (a == "--cv-out") cv_out = value();
       else if (a == "--weight-valid") params.fit.weight_by_valid_pixels = true;
       else if (a == "--nested") nested = true;
@@ -98,38 +107,42 @@ int main(int argc, char** argv) {
       } else if (a == "--prior") {
         const std::string v = value();
         const auto eq = v.find('='), colon = v.find(':');
-        if (eq == std::string::npos || colon == std::string::npos || colon < eq) {
+        if (eq == std::string::npos || colon == std::string::npos || colon < eq)
           throw std::invalid_argument("--prior expects name=mean:strength, got '" + v + "'");
-        }
-        params.fit.priors.push_back({v.substr(0, eq),
-                                     apps::FlagNumber(a, v.substr(eq + 1, colon - eq - 1), false, -apps::kNoLimit),
-                                     apps::FlagNumber(a, v.substr(colon + 1), false, -apps::kNoLimit)});
+        params.fit.priors.push_back(
+            {v.substr(0, eq), apps::FlagNumber(a, v.substr(eq + 1, colon - eq - 1), false,
+                                               -apps::kNoLimit),
+             apps::FlagNumber(a, v.substr(colon + 1), false, 0)});
       } else {
-        throw std::invalid_argument("unknown argument '" + a + "' (see fit_bias --help)");
+        throw std::invalid_argument("unknown argument '" + a + "'");
       }
     }
+    if (in.empty() || out.empty()) throw std::invalid_argument("--in and --out are required");
+    if (nested) params.nested_candidates = model::DefaultCandidates(params.fit);
+    std::string why;
+    if (!params.IsValid(&why)) throw std::invalid_argument(why);
   } catch (const std::exception& e) {
-    return Fail(std::string("bad arguments: ") + e.what());
+    return Fail(std::string(e.what()) + " (see fit_bias --help)");
   }
-  if (in.empty() || out.empty()) return Fail("usage: fit_bias --in metrics.csv --out w.yaml");
-  try {
-    io::CheckOutputs({out, cv_out}, {in});
-  } catch (const io::IoError& e) {
-    return Fail(e.what());
-  }
-  if (nested) params.nested_candidates = model::DefaultCandidates(params.fit);
-  std::string why;
-  if (!params.IsValid(&why)) return Fail(why);
 
   std::vector<records::PanelMetrics> rows;
   std::string sha;
   try {
+    io::CheckOutputs({out, cv_out}, {in});
+    io::CheckOutputFile(out);  // before the work, not after it
+    if (!cv_out.empty()) io::CheckOutputFile(cv_out);
     rows = io::ReadMetricsCsv(in);
     sha = io::Sha256File(in);
   } catch (const io::IoError& e) {
     return Fail(e.what());
+  } catch (const std::bad_alloc&) {
+    return Fail(in + ": out of memory while reading it");
   }
-  const model::FitReport report = model::FitGroups(rows, params);
+  model::FitReport report;
+  {
+    const apps::Ticker ticker("fit_bias: fitting " + std::to_string(rows.size()) + " rows");
+    report = model::FitGroups(rows, params);
+  }
   if (!report.success) return Fail(in + ": " + report.message);
 
   for (const auto& w : report.warnings) std::cerr << "fit_bias: warning: " << w << "\n";
@@ -167,5 +180,7 @@ int main(int argc, char** argv) {
   }
   std::fputs(model::FormatFitTable(report, params).c_str(), stdout);
   if (coverage_k >= 0) std::fputs(model::FormatCoverageTable(report, coverage_k).c_str(), stdout);
-  return 0;
+  std::cerr << "fit_bias: " << report.groups.size() << " groups from " << report.rows_used
+            << " rows (" << report.rows_skipped << " not ok, skipped) \u2192 " << out << "\n";
+  return apps::kExitOk;
 }

@@ -15,6 +15,7 @@
 #include "io/config_file.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
+#include "io/temp_files.h"
 #include "panel/params.h"
 #include "pipeline/extract_recording.h"
 
@@ -26,9 +27,17 @@ namespace {
 using UsageError = std::invalid_argument;
 
 const char* kUsage =
-    "usage: panel_extract [--manifest CSV] [--config YAML] [--out metrics.csv] "
-    "[--panels-out panels.json] [--jobs N] [--region-mode auto|box --boxes JSON] [--quiet] "
-    "BAG_OR_DIR...";
+    "usage: panel_extract [options] BAG_OR_DIR...\n"
+    "Finds the panel in each recording (folders searched for *.bag) and writes one row of\n"
+    "panel metrics per recording. Options (default):\n"
+    "  --manifest CSV       ground truth per bag: distance_m, angle_deg, light (none)\n"
+    "  --config YAML        panel parameters overriding the defaults (none)\n"
+    "  --out FILE           metrics CSV (metrics.csv)\n"
+    "  --panels-out FILE    what each detection found, JSON (none)\n"
+    "  --jobs N             recordings measured at once, 1 to 256 (1)\n"
+    "  --region-mode MODE   auto|box (auto)\n"
+    "  --boxes JSON         boxes of box mode {\"name.bag\": [u0, v0, u1, v1]} (none)\n"
+    "  --quiet              no progress and no summary line (off)\n";
 
 struct Options {
   std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
@@ -41,11 +50,14 @@ struct Job {
   std::string path;
   records::PanelMetrics row;
   std::string json;
+  std::string problem;  // found by the folder search: an error row without reading
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  io::PrepareRosEnvironment();
+  io::InstallSignalCleanup();
   Options o;
   panel::PanelParams params;
   std::unique_ptr<io::Manifest> manifest;
@@ -63,7 +75,7 @@ int main(int argc, char** argv) {
       else if (a == "--region-mode") o.mode = value();
       else if (a == "--jobs") o.jobs = static_cast<int>(args.Number(true, 1, 256));
       else if (a == "--quiet") o.quiet = true;
-      else if (args.IsHelp()) return std::cout << kUsage << "\n", 0;
+      else if (args.IsHelp()) return std::cout << kUsage << apps::kExitHelp, apps::kExitOk;
       else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
       else o.inputs.push_back(a);
     }
@@ -82,17 +94,19 @@ int main(int argc, char** argv) {
     if (!o.manifest.empty()) manifest = std::make_unique<io::Manifest>(io::ReadManifest(o.manifest));
     if (!o.boxes.empty()) boxes = io::ReadBoxes(o.boxes);
     std::vector<std::string> inputs = {o.manifest, o.config, o.boxes};
-    for (const std::string& path : io::ListBags(o.inputs)) {
-      jobs.push_back({path, {}, {}});
-      inputs.push_back(path);
+    for (const io::ListedBag& bag : io::ListBags(o.inputs)) {
+      jobs.push_back({bag.path, {}, {}, bag.problem});
+      inputs.push_back(bag.path);
     }
     io::CheckOutputs({o.out, o.panels_out}, inputs);
+    io::CheckOutputFile(o.out);  // before the work, not after it
+    if (!o.panels_out.empty()) io::CheckOutputFile(o.panels_out);
   } catch (const UsageError& e) {
     std::cerr << "panel_extract: " << e.what() << " (see panel_extract --help)\n";
-    return 2;
+    return apps::kExitError;
   } catch (const std::exception& e) {
     std::cerr << "panel_extract: " << e.what() << "\n";
-    return 2;
+    return apps::kExitError;
   }
 
   const bool progress = !o.quiet && isatty(STDERR_FILENO);
@@ -105,7 +119,13 @@ int main(int argc, char** argv) {
       if (b != boxes.end()) box = panel::PixelBox{b->second[0], b->second[1], b->second[2], b->second[3]};
     }
     pipeline::RecordingResult r;
-    if (o.mode == "box" && !box) {
+    if (!jobs[k].problem.empty()) {  // found by the folder search: no need to read it
+      r.row.bag = io::BaseName(jobs[k].path);
+      r.row.status = "error";
+      r.row.message = jobs[k].problem.rfind(jobs[k].path, 0) == 0
+                          ? jobs[k].problem
+                          : jobs[k].path + ": " + jobs[k].problem;
+    } else if (o.mode == "box" && !box) {
       r.row.bag = io::BaseName(jobs[k].path);
       r.row.status = "error";
       r.row.message = jobs[k].path + ": no box for it in " + o.boxes;
@@ -128,10 +148,12 @@ int main(int argc, char** argv) {
   std::vector<records::PanelMetrics> rows;
   std::string json = "[\n";
   bool all_ok = true;
+  std::map<std::string, std::size_t> by_status;
   for (const Job& j : jobs) {
     rows.push_back(j.row);
     json += (rows.size() > 1 ? ",\n" : "") + j.json;
     all_ok = all_ok && j.row.ok();
+    ++by_status[j.row.status];
   }
   try {
     std::vector<std::pair<std::string, std::string>> files = {{o.out, io::FormatMetricsCsv(rows)}};
@@ -139,7 +161,10 @@ int main(int argc, char** argv) {
     io::WriteFilesAtomic(files);  // both or neither
   } catch (const std::exception& e) {
     std::cerr << "panel_extract: " << e.what() << "\n";
-    return 2;
+    return apps::kExitError;
   }
-  return all_ok ? 0 : 1;
+  if (!o.quiet)
+    std::cerr << "panel_extract: " << apps::Summary(rows.size(), "recording", by_status, o.out)
+              << "\n";
+  return all_ok ? apps::kExitOk : apps::kExitRowsFailed;
 }

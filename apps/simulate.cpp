@@ -1,8 +1,11 @@
 // simulate: the simulated D455 on a protocol (lib/sim): bags and their manifest, the metrics-only
 // table, or the base sensor calibrated to a real table (see kUsage). --threads N: recordings
 // simulated in parallel (default: all cores; results do not depend on it).
+#include <glog/logging.h>
+
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -15,6 +18,8 @@
 #include "io/csv.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
+#include "io/temp_files.h"
+#include "io/yaml_limits.h"
 #include "sim/calibrate.h"
 #include "sim/config_yaml.h"
 #include "sim/render_protocol.h"
@@ -28,12 +33,23 @@ constexpr char kUsage[] =
     "usage: simulate --protocol P.yaml --out-dir DIR            bags + DIR/manifest.csv\n"
     "       simulate --protocol P.yaml --metrics-only --out metrics.csv\n"
     "       simulate --protocol P.yaml --calibrate-to real.csv --out sensor.yaml\n"
-    "  [--frames N] [--seed S] [--effects effects.yaml] [--sensor sensor.yaml|builtin]\n"
-    "  [--sensor-from real.bag] [--margin-px M] [--threads N]\n"
     "Simulates the D455 on a protocol: RealSense bags with their ground truth, the panel\n"
     "metrics directly (fast path), or the base sensor calibrated to a real metrics table.\n"
-    "--sensor overrides the protocol's sensor file; --sensor-from then takes a recording's\n"
-    "depth intrinsics, depth units and Stereo_Baseline.\n";
+    "A run's bags and manifest are written all or none. Options (default):\n"
+    "  --protocol FILE      protocol YAML (required)\n"
+    "  --out-dir DIR        write bags and DIR/manifest.csv (one of these three modes)\n"
+    "  --metrics-only       write the metrics table to --out\n"
+    "  --calibrate-to CSV   fit the base sensor to a real table, write it to --out\n"
+    "  --out FILE           output of --metrics-only and --calibrate-to\n"
+    "  --frames N           frames per recording, 1 to 100000 (the protocol's)\n"
+    "  --seed S             seed of every random draw (0)\n"
+    "  --effects FILE       effects YAML added to the base sensor (none)\n"
+    "  --sensor FILE        sensor YAML, or builtin (the protocol's sensor file)\n"
+    "  --sensor-from BAG    take the depth intrinsics, units and Stereo_Baseline of a\n"
+    "                       recording (none)\n"
+    "  --margin-px M        region margin of the metrics [px], >= 0 (the metrics default)\n"
+    "  --threads N          recordings simulated in parallel, 1 to 256 (all cores)\n";
+constexpr int kMaxFrames = 100000;  // about 55 min at 30 fps per recording
 
 struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -45,11 +61,37 @@ std::string Fixed(double v, int digits) {
   return buf;
 }
 
-// Every recording of the protocol as a bag in dir (renamed into place when complete), then
-// DIR/manifest.csv with each recording's truth. The first error stops the run.
+std::string BagPath(const std::string& dir, const sim::Cell& cell) {
+  return (fs::path(dir) / (cell.name + ".bag")).string();
+}
+
+// Before any work: the bags (and their .part) and the manifest of --out-dir are new outputs
+// (none an input, no two alike: duplicate distances in a protocol name two recordings alike),
+// the folder is writable and has room for them.
+void CheckRecordings(const sim::SimParams& params, const std::string& dir,
+                     const std::vector<std::string>& inputs) {
+  std::vector<std::string> names = {"manifest.csv"};
+  const std::vector<sim::Cell> cells = sim::MakeCells(params.protocol);
+  for (const sim::Cell& cell : cells) {
+    names.push_back(cell.name + ".bag");
+    names.push_back(cell.name + ".bag.part");
+  }
+  const auto& in = params.sensor.intrinsics;
+  const double frame_bytes = 2.0 * in.width * in.height + 2048.0;  // pixels and message
+  io::CheckOutputSet(dir, names, inputs,
+                     static_cast<double>(cells.size()) *
+                         (params.protocol.frames * frame_bytes + 65536.0));
+}
+
+// Every recording of the protocol as a bag in dir, then DIR/manifest.csv with each recording's
+// truth. Bags stay DIR/NAME.bag.part until every recording is finished, then all are renamed
+// into place and the manifest written; the first error (or a signal) removes them all.
 void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
                      const std::string& dir) {
   fs::create_directories(dir);
+  std::mutex mutex;
+  std::vector<std::shared_ptr<io::BagWriter>> writers;
+  apps::Progress progress(sim::MakeCells(params.protocol).size());
   auto open = [&](const sim::Cell& cell) {
     io::BagWriterConfig config;
     config.intrinsics = params.sensor.intrinsics;
@@ -59,10 +101,16 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
     config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
     config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
     config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
-    const auto writer =
-        std::make_shared<io::BagWriter>((fs::path(dir) / (cell.name + ".bag")).string(), config);
+    const auto writer = std::make_shared<io::BagWriter>(BagPath(dir, cell), config);
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      writers.push_back(writer);
+    }
     return sim::RecordingOutput{[writer](const records::DepthFrame& f) { writer->Write(f); },
-                                [writer] { writer->Close(); }};
+                                [writer, &progress, name = cell.name] {
+                                  writer->Finish();
+                                  progress.Step(name);
+                                }};
   };
   std::vector<io::ManifestRow> rows;
   for (const sim::RenderedRecording& r :
@@ -81,8 +129,6 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
                   {"true_hole_rate_pct", Fixed(r.truth.metrics.hole_rate_pct, 3)}};
     rows.push_back(row);
   }
-  io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
-                    {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
   // Obstacle scenes: where each obstacle's face towards the camera is (the same in every
   // recording of the protocol).
   std::vector<std::vector<std::string>> obstacles;
@@ -90,9 +136,16 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
     obstacles.push_back({o.obstacle.kind, Fixed(o.face_range_m, 6), Fixed(o.face_azimuth_deg, 4),
                          Fixed(o.face_center_m.x(), 6), Fixed(o.face_center_m.y(), 6),
                          Fixed(o.face_center_m.z(), 6)});
-  if (!obstacles.empty())
-    io::WriteCsv((fs::path(dir) / "obstacles.csv").string(),
-                 {"kind", "range_m", "azimuth_deg", "x_m", "y_m", "z_m"}, obstacles);
+  progress.Clear();
+  {
+    const io::CommitScope all_or_none;  // a signal now waits for the last rename
+    for (const auto& w : writers) w->Commit();
+    io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
+                      {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
+    if (!obstacles.empty())
+      io::WriteCsv((fs::path(dir) / "obstacles.csv").string(),
+                   {"kind", "range_m", "azimuth_deg", "x_m", "y_m", "z_m"}, obstacles);
+  }
   std::printf("simulate: %zu recordings of %d frames in %s\n", rows.size(),
               params.protocol.frames, dir.c_str());
 }
@@ -132,6 +185,11 @@ void SensorFromRecording(const std::string& bag, sim::SensorParams* sensor) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres (--calibrate-to) logs through glog
+  FLAGS_logtostderr = true;
+  google::InitGoogleLogging(argv[0]);
+  io::PrepareRosEnvironment();
+  io::InstallSignalCleanup();
   std::string protocol_file, sensor_file, sensor_bag, effects_file, out_dir, out, calibrate_to;
   bool metrics_only = false;
   int frames = 0;
@@ -143,10 +201,10 @@ int main(int argc, char** argv) {
       const std::string& a = args.flag();
       if (args.IsHelp()) {
         std::fputs(kUsage, stdout);
-        return 0;
+        std::fputs(apps::kExitHelp, stdout);
+        return apps::kExitOk;
       }
       auto value = [&] { return args.Value(); };
-      constexpr double kMaxInt = 2147483647.0;
       if (a == "--protocol") protocol_file = value();
       else if (a == "--sensor") sensor_file = value();
       else if (a == "--sensor-from") sensor_bag = value();
@@ -155,36 +213,47 @@ int main(int argc, char** argv) {
       else if (a == "--out") out = value();
       else if (a == "--calibrate-to") calibrate_to = value();
       else if (a == "--metrics-only") metrics_only = true;
-      else if (a == "--frames") frames = static_cast<int>(args.Number(true, 1, kMaxInt));
+      else if (a == "--frames") frames = static_cast<int>(args.Number(true, 1, kMaxFrames));
       else if (a == "--seed") params.seed = static_cast<std::uint64_t>(args.Number(true, 0, 9007199254740992.0));
       else if (a == "--margin-px") mp.region_margin_px = args.Number(false, 0);
       else if (a == "--threads") mp.threads = static_cast<int>(args.Number(true, 1, 256));
-      else throw Fail("unknown argument '" + a + "' (see simulate --help)");
+      else throw std::invalid_argument("unknown argument '" + a + "' (see simulate --help)");
     }
     if (protocol_file.empty()) throw Fail("--protocol FILE is required");
     if ((out_dir.empty() ? 0 : 1) + metrics_only + !calibrate_to.empty() != 1)
       throw Fail("choose one of --out-dir DIR, --metrics-only, --calibrate-to real.csv");
     if ((metrics_only || !calibrate_to.empty()) && out.empty()) throw Fail("--out is required");
     std::string why, named_sensor;
-    if (!sim::ParseProtocolYaml(io::ReadFile(protocol_file), &params.protocol, &named_sensor,
+    if (!sim::ParseProtocolYaml(io::ReadYamlFile(protocol_file), &params.protocol, &named_sensor,
                                 &why))
       throw Fail(protocol_file + ": " + why);
     if (sensor_file.empty() && !named_sensor.empty())
       sensor_file = (fs::path(protocol_file).parent_path() / named_sensor).string();
     if (!sensor_file.empty() && sensor_file != "builtin" &&
-        !sim::ParseSensorYaml(io::ReadFile(sensor_file), &params.sensor, &why))
+        !sim::ParseSensorYaml(io::ReadYamlFile(sensor_file), &params.sensor, &why))
       throw Fail(sensor_file + ": " + why);
     if (!sensor_bag.empty()) SensorFromRecording(sensor_bag, &params.sensor);
     if (!effects_file.empty()) {
       std::vector<sim::EffectSpec> effects;
-      if (!sim::ParseEffectsYaml(io::ReadFile(effects_file), &effects, &why) ||
+      if (!sim::ParseEffectsYaml(io::ReadYamlFile(effects_file), &effects, &why) ||
           !sim::BuildDepartures(effects, &params.departures, &why))
         throw Fail(effects_file + ": " + why);
     }
-    io::CheckOutputs({out, out_dir.empty() ? "" : (fs::path(out_dir) / "manifest.csv").string()},
-                     {protocol_file, sensor_file, effects_file, calibrate_to, sensor_bag});
+    const std::vector<std::string> inputs = {protocol_file, sensor_file, effects_file,
+                                             calibrate_to, sensor_bag};
     if (frames != 0) params.protocol.frames = frames;
-    if (!params.IsValid(&why) || !mp.IsValid(&why)) throw Fail(why);
+    if (!params.IsValid(&why) || !mp.IsValid(&why)) {
+      std::string from = protocol_file;
+      for (const std::string& f : {sensor_file, sensor_bag, effects_file})
+        if (!f.empty() && f != "builtin") from += ", " + f;
+      throw Fail(from + ": " + why);
+    }
+    if (params.protocol.frames > kMaxFrames)
+      throw Fail(protocol_file + ": " + std::to_string(params.protocol.frames) +
+                 " frames per recording, more than " + std::to_string(kMaxFrames));
+    io::CheckOutputs({out}, inputs);
+    if (!out.empty()) io::CheckOutputFile(out);  // before the work, not after it
+    if (!out_dir.empty()) CheckRecordings(params, out_dir, inputs);
 
     if (!out_dir.empty()) {
       WriteRecordings(params, mp, out_dir);
@@ -195,9 +264,12 @@ int main(int argc, char** argv) {
     } else {
       Calibrate(params, calibrate_to, out, mp);
     }
+  } catch (const std::bad_alloc&) {
+    std::cerr << "simulate: " << protocol_file << ": out of memory while simulating it\n";
+    return apps::kExitError;
   } catch (const std::exception& e) {
     std::cerr << "simulate: " << e.what() << "\n";
-    return 1;
+    return apps::kExitError;
   }
-  return 0;
+  return apps::kExitOk;
 }

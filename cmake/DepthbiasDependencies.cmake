@@ -3,6 +3,7 @@
 # depthbiasConfig.cmake finds the same ones (find_dependency) before it recreates the targets of
 # DepthbiasSystemTargets.cmake and imports the library's.
 set(DEPTHBIAS_DEPENDENCIES
+  "Threads"
   "Eigen3 3.3 NO_MODULE"
   "yaml-cpp"
   "Ceres"

@@ -4,6 +4,8 @@
 #include <cctype>
 #include <cmath>
 
+#include "records/number_text.h"
+
 namespace depthbias::camera {
 namespace {
 
@@ -61,12 +63,35 @@ bool Intrinsics::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (width <= 0 || height <= 0) return fail("image size must be positive");
-  if (!(fx > 0) || !(fy > 0) || !std::isfinite(fx) || !std::isfinite(fy))
-    return fail("focal lengths must be positive and finite");
-  if (!std::isfinite(ppx) || !std::isfinite(ppy)) return fail("principal point must be finite");
+  using records::NumberText;
+  if (width < 1 || height < 1 || width > kMaxImageSidePx || height > kMaxImageSidePx)
+    return fail("image size " + std::to_string(width) + " x " + std::to_string(height) +
+                " px is outside 1 to " + std::to_string(kMaxImageSidePx) + " px a side");
+  if (!std::isfinite(fx) || !std::isfinite(fy) || !(fx > 0) || !(fy > 0))
+    return fail("focal lengths " + records::SizeText(fx, fy, "px") +
+                " must be positive and finite");
+  // Plausible lenses only: a focal length between 1/100 and 100 times the image's larger side
+  // (fields of view from about 0.6 to 178 degrees), square-ish pixels.
+  const double side = std::max(width, height);
+  for (double f : {fx, fy})
+    if (f < kMinFocalPerSide * side || f > kMaxFocalPerSide * side)
+      return fail("focal length " + NumberText(f) + " px is implausible for a " +
+                  std::to_string(width) + " x " + std::to_string(height) + " px image (expected " +
+                  NumberText(kMinFocalPerSide * side) + " to " +
+                  NumberText(kMaxFocalPerSide * side) + " px)");
+  if (fx > kMaxPixelAspect * fy || fy > kMaxPixelAspect * fx)
+    return fail("focal lengths " + records::SizeText(fx, fy, "px") + " differ more than " +
+                NumberText(kMaxPixelAspect) + " times");
+  // The principal point within the image widened by its own size on every side.
+  if (!std::isfinite(ppx) || !std::isfinite(ppy) || ppx < -width || ppx > 2.0 * width ||
+      ppy < -height || ppy > 2.0 * height)
+    return fail("principal point (" + NumberText(ppx) + ", " + NumberText(ppy) +
+                ") px is implausible for a " + std::to_string(width) + " x " +
+                std::to_string(height) + " px image");
   for (double c : coeffs)
-    if (!std::isfinite(c)) return fail("distortion coefficients must be finite");
+    if (!std::isfinite(c) || std::fabs(c) > kMaxDistortionCoeff)
+      return fail("distortion coefficient " + NumberText(c) + " is not a finite number within " +
+                  "+-" + NumberText(kMaxDistortionCoeff));
   return true;
 }
 

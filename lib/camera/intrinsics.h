@@ -37,7 +37,19 @@ struct Intrinsics {
   Distortion model = Distortion::kBrownConrady;
   std::array<double, 5> coeffs{{0, 0, 0, 0, 0}};  // k1, k2, p1, p2, k3
 
+  // Plausibility, checked wherever intrinsics come in (bag reader, sensor YAML, writer, panel
+  // extraction): sides of 1 to kMaxImageSidePx, finite focal lengths of kMinFocalPerSide to
+  // kMaxFocalPerSide times the larger side with fx/fy within kMaxPixelAspect, the principal
+  // point within the image widened by its size on each side, |coefficients| <= 100. A camera
+  // outside these bounds is a damaged or made-up record (fx = 1e-300 made PCL's clustering
+  // crash), never a lens.
   bool IsValid(std::string* why) const;
+
+  static constexpr int kMaxImageSidePx = 65535;
+  static constexpr double kMinFocalPerSide = 0.01;
+  static constexpr double kMaxFocalPerSide = 100.0;
+  static constexpr double kMaxPixelAspect = 4.0;
+  static constexpr double kMaxDistortionCoeff = 100.0;
 };
 
 // Rigid transform from one stream's frame to another's, as rs2_extrinsics holds it.

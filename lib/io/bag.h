@@ -79,6 +79,11 @@ struct BagInfo {
 };
 
 
+// Points ROS_HOME at a private temporary folder when rospack could not write its cache in
+// ~/.ros (it would print warnings on stderr). Called before rosbag is first used; apps call it
+// at the start of main, before any thread starts (setenv is not thread-safe).
+void PrepareRosEnvironment();
+
 struct ReadOptions {
   // On damage, stop at the last good frame instead of throwing. A bag rosbag cannot open (no
   // index because it was cut short or never closed, or damage found by the structural check) is
@@ -121,8 +126,11 @@ struct BagWriterConfig {
 
 // Writes a depth-only bag in the layout librealsense's recorder writes and its playback reads
 // (device 0, sensor 0 "Stereo Module", stream Depth_0, mono16). Each frame keeps its own depth
-// units, number and device timestamp. The bag is written to PATH.part and renamed at Close();
-// a writer destroyed without Close() (an error unwound past it) removes PATH.part.
+// units, number and device timestamp. The bag is written to PATH.part (removed on SIGINT and
+// SIGTERM once io::InstallSignalCleanup ran) and renamed at Close(), or at Commit() after
+// Finish(); a writer destroyed before that (an error unwound past it, or a later recording of
+// the same run failed) removes PATH.part. A PATH that exists and is not a regular file (a
+// folder, a device) is refused at construction. A full disk is a BagError, never an abort.
 class BagWriter {
  public:
   BagWriter(const std::string& path, BagWriterConfig config);  // throws BagError
@@ -131,7 +139,11 @@ class BagWriter {
   BagWriter& operator=(const BagWriter&) = delete;
 
   void Write(const records::DepthFrame& frame);  // throws BagError
-  void Close();                                 // throws BagError
+  void Close();                                 // Finish() then Commit(); throws BagError
+  // Completes the bag at PATH.part without renaming it: a run renames its bags together, all
+  // or none, with Commit() once every recording is finished.
+  void Finish();  // throws BagError
+  void Commit();  // throws BagError
 
  private:
   struct Impl;

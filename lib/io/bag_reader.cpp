@@ -45,6 +45,7 @@
 
 #include "io/bag.h"
 #include "io/bag_records.h"
+#include "io/ranges.h"
 #include "io/rosbag_guard.h"
 
 namespace depthbias::io {
@@ -857,8 +858,8 @@ struct BagReader::Impl {
     info.depth.encoding = v.encoding;  // the frames' own encoding wins over the stream info
     info.depth.width = static_cast<int>(v.width);
     info.depth.height = static_cast<int>(v.height);
-    first_frame_has_units = v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0;
-    if (first_frame_has_units) info.depth_units_m = v.depth_units;
+    first_frame_has_units = v.has_depth_units;
+    if (first_frame_has_units) info.depth_units_m = CheckedUnits(v);
   }
 
   void BuildInfo(bool first_seen) {
@@ -920,8 +921,12 @@ struct BagReader::Impl {
     info.sensor = sensor_info[sensor];
     info.device = device_info[t.device];
     const auto units = info.options.find("Depth_Units");
-    if (units != info.options.end() && std::isfinite(units->second) && units->second > 0)
+    if (units != info.options.end()) {
+      const std::string why = rules::kDepthUnitsM.Why(units->second);
+      if (!why.empty())
+        Fail(BagError::Kind::kCorrupt, "recorded option Depth_Units: " + why);
       fallback_units_m = units->second;
+    }
     if (!first_seen || !first_frame_has_units) info.depth_units_m = fallback_units_m;
     const StreamKey key{sensor, t.stream_type, t.stream_index};
     if (camera_infos.count(key)) {
@@ -938,8 +943,27 @@ struct BagReader::Impl {
                                            OneLine(ci.distortion_model) + "'");
       in.coeffs = {0, 0, 0, 0, 0};
       for (std::size_t i = 0; i < ci.d.size() && i < in.coeffs.size(); ++i) in.coeffs[i] = ci.d[i];
+      std::string why;
+      if (!in.IsValid(&why)) Fail(BagError::Kind::kCorrupt, "depth camera_info: " + why);
+      if (first_seen && info.depth.width > 0 &&
+          (info.depth.width != in.width || info.depth.height != in.height))
+        Fail(BagError::Kind::kCorrupt,
+             "depth camera_info is for " + std::to_string(in.width) + " x " +
+                 std::to_string(in.height) + " px, the depth frames are " +
+                 std::to_string(info.depth.width) + " x " + std::to_string(info.depth.height) +
+                 " px");
       info.has_depth_intrinsics = true;
     }
+  }
+
+  // A frame's own depth units, refused when implausible (0, negative or NaN units are a damaged
+  // frame, not 1 mm).
+  double CheckedUnits(const ImageView& v) const {
+    const std::string why = rules::kDepthUnitsM.Why(v.depth_units);
+    if (!why.empty())
+      Fail(BagError::Kind::kCorrupt,
+           "depth frame " + std::to_string(v.seq) + ": depth units " + why);
+    return v.depth_units;
   }
 
   // One serialized sensor_msgs/Image of the depth stream into a frame (both paths).
@@ -966,9 +990,7 @@ struct BagReader::Impl {
     frame->height = static_cast<int>(v.height);
     frame->frame_number = v.seq;
     frame->timestamp_ms = v.stamp_ms;
-    frame->depth_units_m = (v.has_depth_units && std::isfinite(v.depth_units) && v.depth_units > 0)
-                               ? static_cast<double>(v.depth_units)
-                               : fallback_units_m;
+    frame->depth_units_m = v.has_depth_units ? CheckedUnits(v) : fallback_units_m;
     frame->counts.resize(static_cast<std::size_t>(v.width) * v.height);
     std::uint8_t* dst = reinterpret_cast<std::uint8_t*>(frame->counts.data());
     if (v.step == row) {

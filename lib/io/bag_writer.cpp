@@ -16,12 +16,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <sys/stat.h>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "io/bag.h"
 #include "io/rosbag_guard.h"
+#include "io/temp_files.h"
 
 namespace depthbias::io {
 namespace bag_detail {
@@ -171,6 +173,7 @@ struct BagWriter::Impl {
   BagWriterConfig config;
   bag_detail::GuardedBag bag;
   bool open = false;
+  bool finished = false;  // closed at temp_path, not yet renamed into place
   bool have_first = false;
   double first_ms = 0.0;
   std::uint64_t last_ns = 1;
@@ -257,31 +260,46 @@ BagWriter::BagWriter(const std::string& path, BagWriterConfig config) : impl_(ne
   d.config = std::move(config);
   std::string why;
   if (!d.config.IsValid(&why)) d.Fail(why);
+  // Never renamed over a folder, a device or a pipe: refused before any frame is written.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    d.Fail(S_ISDIR(st.st_mode) ? "a folder has the bag's name"
+                               : "exists and is not a regular file; a bag is never written over it");
   d.temp_path = path + ".part";
   try {
+    RegisterTempFile(d.temp_path);
     d.bag.Open(d.temp_path, rosbag::bagmode::Write);
     d.open = true;
     if (d.config.compress_lz4) d.bag->setCompression(rosbag::compression::LZ4);
     d.WriteStatic();
   } catch (const std::exception& e) {
-    if (d.open) d.bag.Close();
+    d.open = false;
+    try {
+      d.bag.Close();
+    } catch (const std::exception&) {
+      // the first error is the one reported
+    }
     std::remove(d.temp_path.c_str());
+    UnregisterTempFile(d.temp_path);
     d.Fail(std::string("cannot write: ") + e.what());
   }
 }
 
 BagWriter::~BagWriter() {
-  // Never closed: the recording was abandoned (an error unwound past it). Its partial file goes,
-  // so that no bag with frames missing takes the final name.
+  // Never closed or never committed: the recording was abandoned (an error unwound past it, or
+  // a later recording of the run failed). Its partial file goes, so that no bag with frames
+  // missing takes the final name and a run's bags are all or none.
   Impl& d = *impl_;
-  if (!d.open) return;
+  if (!d.open && !d.finished) return;
   d.open = false;
+  d.finished = false;
   try {
     d.bag.Close();
   } catch (const std::exception&) {
     // the file is removed below either way; a destructor must not throw
   }
   std::remove(d.temp_path.c_str());
+  UnregisterTempFile(d.temp_path);
 }
 
 void BagWriter::Write(const records::DepthFrame& frame) {
@@ -290,9 +308,9 @@ void BagWriter::Write(const records::DepthFrame& frame) {
   const camera::Intrinsics& in = d.config.intrinsics;
   if (frame.width != in.width || frame.height != in.height ||
       frame.counts.size() != static_cast<std::size_t>(frame.width) * frame.height)
-    d.Fail("frame of " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
-           " does not match the stream's " + std::to_string(in.width) + "x" +
-           std::to_string(in.height));
+    d.Fail("frame of " + std::to_string(frame.width) + " x " + std::to_string(frame.height) +
+           " px does not match the stream's " + std::to_string(in.width) + " x " +
+           std::to_string(in.height) + " px");
   if (!d.have_first) {
     d.first_ms = frame.timestamp_ms;
     d.have_first = true;
@@ -329,7 +347,7 @@ void BagWriter::Write(const records::DepthFrame& frame) {
   ++d.frames;
 }
 
-void BagWriter::Close() {
+void BagWriter::Finish() {
   Impl& d = *impl_;
   if (!d.open) return;
   d.open = false;
@@ -337,12 +355,26 @@ void BagWriter::Close() {
     d.bag.Close();
   } catch (const std::exception& e) {
     std::remove(d.temp_path.c_str());
+    UnregisterTempFile(d.temp_path);
     d.Fail(std::string("cannot close: ") + e.what());
   }
-  if (std::rename(d.temp_path.c_str(), d.path.c_str()) != 0) {
-    std::remove(d.temp_path.c_str());
-    d.Fail(std::string("cannot rename the finished bag into place: ") + std::strerror(errno));
-  }
+  d.finished = true;
 }
+
+void BagWriter::Commit() {
+  Impl& d = *impl_;
+  Finish();
+  if (!d.finished) return;
+  d.finished = false;
+  if (std::rename(d.temp_path.c_str(), d.path.c_str()) != 0) {
+    const std::string err = std::strerror(errno);
+    std::remove(d.temp_path.c_str());
+    UnregisterTempFile(d.temp_path);
+    d.Fail("cannot rename the finished bag into place: " + err);
+  }
+  UnregisterTempFile(d.temp_path);
+}
+
+void BagWriter::Close() { Commit(); }
 
 }  // namespace depthbias::io

@@ -6,23 +6,25 @@
 #include <yaml-cpp/yaml.h>
 
 #include "io/atomic_file.h"
+#include "io/yaml_limits.h"
 
 namespace depthbias::io {
 namespace {
 
-YAML::Node Load(const std::string& text, const std::string& file) {
-  try {
-    return YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw IoError(file + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML/JSON: " +
-                  e.msg);
-  }
+YAML::Node Load(const std::string& text, const std::string& file) { return LoadYaml(text, file); }
+
+// A mapping's key as text; a key that is a list or a map is refused.
+std::string Key(const YAML::Node& key, const std::string& file) {
+  if (!key.IsScalar())
+    throw IoError(file + ":" + std::to_string(key.Mark().line + 1) +
+                  ": a key must be a plain name, not a list or a map");
+  return key.Scalar();
 }
 
 void Flatten(const YAML::Node& node, const std::string& prefix, const std::string& file,
              std::vector<ConfigEntry>* out) {
   for (const auto& kv : node) {
-    const std::string key = prefix + kv.first.as<std::string>();
+    const std::string key = prefix + Key(kv.first, file);
     const YAML::Node& v = kv.second;
     const int line = v.Mark().line + 1;
     if (v.IsMap()) {
@@ -52,7 +54,7 @@ std::vector<ConfigEntry> ParseConfigScalars(const std::string& text, const std::
 }
 
 std::vector<ConfigEntry> ReadConfigScalars(const std::string& path) {
-  return ParseConfigScalars(ReadFile(path), path);
+  return ParseConfigScalars(ReadFile(path, kMaxYamlBytes), path);
 }
 
 std::map<std::string, std::array<double, 4>> ParseBoxes(const std::string& text,
@@ -61,7 +63,7 @@ std::map<std::string, std::array<double, 4>> ParseBoxes(const std::string& text,
   if (!root.IsMap()) throw IoError(file + ": expected {\"bag name\": [u0, v0, u1, v1], ...}");
   std::map<std::string, std::array<double, 4>> boxes;
   for (const auto& kv : root) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = Key(kv.first, file);
     const YAML::Node& v = kv.second;
     const std::string where = file + ":" + std::to_string(v.Mark().line + 1) + ": box of '" +
                               name + "'";
@@ -81,7 +83,7 @@ std::map<std::string, std::array<double, 4>> ParseBoxes(const std::string& text,
 }
 
 std::map<std::string, std::array<double, 4>> ReadBoxes(const std::string& path) {
-  return ParseBoxes(ReadFile(path), path);
+  return ParseBoxes(ReadFile(path, kMaxYamlBytes), path);
 }
 
 }  // namespace depthbias::io

@@ -4,6 +4,7 @@
 
 #include "io/atomic_file.h"
 #include "io/csv.h"
+#include "io/ranges.h"
 
 namespace depthbias::io {
 
@@ -51,15 +52,11 @@ Manifest ParseManifest(const std::string& text, const std::string& file) {
     m.bag = t.Cell(r, bag);
     if (m.bag.empty()) throw IoError(t.Where(r) + ": column 'bag': empty");
     m.distance_m = t.RequiredNumber(r, distance);
-    if (!(m.distance_m > 0.0)) {
-      throw IoError(t.Where(r) + ": column 'distance_m': " + t.Cell(r, distance) +
-                    " is not a positive distance");
-    }
+    if (const std::string why = rules::kDistanceM.Why(m.distance_m); !why.empty())
+      throw IoError(t.Where(r) + ": column 'distance_m': " + why);
     m.angle_deg = t.RequiredNumber(r, angle);
-    if (std::abs(m.angle_deg) >= 90.0) {
-      throw IoError(t.Where(r) + ": column 'angle_deg': " + t.Cell(r, angle) +
-                    " is not an angle in (-90, 90) degrees");
-    }
+    if (const std::string why = rules::kAngleDeg.Why(m.angle_deg); !why.empty())
+      throw IoError(t.Where(r) + ": column 'angle_deg': " + why);
     m.light = t.Cell(r, light);
     if (m.light.empty()) throw IoError(t.Where(r) + ": column 'light': empty");
     if (preset >= 0 && !t.Cell(r, preset).empty()) m.preset = t.Cell(r, preset);

@@ -4,6 +4,7 @@
 
 #include "io/atomic_file.h"
 #include "io/csv.h"
+#include "io/ranges.h"
 
 namespace depthbias::io {
 namespace {
@@ -13,27 +14,28 @@ using records::PanelMetrics;
 struct NumberColumn {
   const char* name;
   double PanelMetrics::*field;
+  NumberRule rule;  // io/ranges.h: the same rules as every other reader
 };
 
 // Numeric columns in DESIGN.md's order, after the four text columns.
 const NumberColumn kNumbers[] = {
-    {"distance_m", &PanelMetrics::distance_m},
-    {"angle_deg", &PanelMetrics::angle_deg},
-    {"frames", &PanelMetrics::frames},
-    {"mean_m", &PanelMetrics::mean_m},
-    {"median_m", &PanelMetrics::median_m},
-    {"plane_std_m", &PanelMetrics::plane_std_m},
-    {"hole_rate_pct", &PanelMetrics::hole_rate_pct},
-    {"valid_pct", &PanelMetrics::valid_pct},
-    {"range_m", &PanelMetrics::range_m},
-    {"azimuth_deg", &PanelMetrics::azimuth_deg},
-    {"elevation_deg", &PanelMetrics::elevation_deg},
-    {"normal_tilt_deg", &PanelMetrics::normal_tilt_deg},
-    {"panel_width_m", &PanelMetrics::panel_width_m},
-    {"panel_height_m", &PanelMetrics::panel_height_m},
-    {"region_px", &PanelMetrics::region_px},
-    {"subpixel_rms_px", &PanelMetrics::subpixel_rms_px},
-    {"temporal_std_m", &PanelMetrics::temporal_std_m},
+    {"distance_m", &PanelMetrics::distance_m, rules::kDistanceM},
+    {"angle_deg", &PanelMetrics::angle_deg, rules::kAngleDeg},
+    {"frames", &PanelMetrics::frames, rules::kCount},
+    {"mean_m", &PanelMetrics::mean_m, rules::kDistanceM},
+    {"median_m", &PanelMetrics::median_m, rules::kDistanceM},
+    {"plane_std_m", &PanelMetrics::plane_std_m, rules::kSpreadM},
+    {"hole_rate_pct", &PanelMetrics::hole_rate_pct, rules::kPercent},
+    {"valid_pct", &PanelMetrics::valid_pct, rules::kPercent},
+    {"range_m", &PanelMetrics::range_m, rules::kDistanceM},
+    {"azimuth_deg", &PanelMetrics::azimuth_deg, rules::kDirectionDeg},
+    {"elevation_deg", &PanelMetrics::elevation_deg, rules::kDirectionDeg},
+    {"normal_tilt_deg", &PanelMetrics::normal_tilt_deg, rules::kTiltDeg},
+    {"panel_width_m", &PanelMetrics::panel_width_m, rules::kSpreadM},
+    {"panel_height_m", &PanelMetrics::panel_height_m, rules::kSpreadM},
+    {"region_px", &PanelMetrics::region_px, rules::kCount},
+    {"subpixel_rms_px", &PanelMetrics::subpixel_rms_px, rules::kNonNegative},
+    {"temporal_std_m", &PanelMetrics::temporal_std_m, rules::kSpreadM},
 };
 constexpr int kArticleNumbers = 8;  // distance_m … valid_pct
 
@@ -79,8 +81,12 @@ std::vector<PanelMetrics> ParseMetricsCsv(const std::string& text, const std::st
       // Ground truth (distance_m, angle_deg) may be empty: panel_extract run without a manifest
       // measures a recording it knows nothing about. Fitting skips such rows.
       const bool required = m.ok() && (name == "median_m" || name == "mean_m");
-      m.*(kNumbers[i].field) =
-          required ? t.RequiredNumber(r, num_col[i]) : t.Number(r, num_col[i]);
+      const double v = required ? t.RequiredNumber(r, num_col[i]) : t.Number(r, num_col[i]);
+      if (!std::isnan(v)) {
+        const std::string why = kNumbers[i].rule.Why(v);
+        if (!why.empty()) throw IoError(t.Where(r) + ": column '" + name + "': " + why);
+      }
+      m.*(kNumbers[i].field) = v;
     }
     if (m.bag.empty()) throw IoError(t.Where(r) + ": column 'bag': empty");
     out.push_back(std::move(m));

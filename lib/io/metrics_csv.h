@@ -18,6 +18,9 @@ const std::vector<std::string>& MetricsColumns();
 // median_m, plane_std_m, hole_rate_pct, valid_pct (the article's twelve). distance_m and
 // angle_deg must be numbers in every row; median_m and mean_m in every row whose status is
 // "ok" (a missing status column means "ok"). Any other numeric cell may be empty (NaN).
+// A number present must lie in its column's range (io/ranges.h, the rules the manifest and the
+// weights YAML follow too): distances, depths and ranges in (0, 1000] m, angle_deg in
+// (-90, 90), percentages in [0, 100], spreads and counts >= 0, counts whole.
 // Throws IoError naming the file, the line and the column.
 std::vector<records::PanelMetrics> ParseMetricsCsv(const std::string& text,
                                                   const std::string& file);

@@ -7,6 +7,8 @@
 
 #include "io/atomic_file.h"
 #include "io/csv.h"
+#include "io/ranges.h"
+#include "io/yaml_limits.h"
 
 namespace depthbias::io {
 namespace {
@@ -57,6 +59,15 @@ class Reader {
       Fail(path, "'" + n.Scalar() + "' is not true or false");
     }
   }
+  // A number within `rule`; NaN too when `nan_ok` (a value the fit could not give: n <= p).
+  double Checked(const YAML::Node& n, const std::string& path, const NumberRule& rule,
+                 bool nan_ok = false) const {
+    const double v = Double(n, path);
+    if (nan_ok && std::isnan(v)) return v;
+    const std::string why = rule.Why(v);
+    if (!why.empty()) Fail(path, why);
+    return v;
+  }
   std::string String(const YAML::Node& n, const std::string& path) const {
     if (!n.IsScalar()) Fail(path, "expected a text value");
     return n.Scalar();
@@ -85,13 +96,49 @@ class Reader {
   records::BiasCrossValidation Cv(const YAML::Node& n, const std::string& path) const {
     if (!n.IsMap()) Fail(path, "expected a map {scheme, rmse_m, mae_m}");
     return {String(Need(n, "scheme", path + ".scheme"), path + ".scheme"),
-            Double(Need(n, "rmse_m", path + ".rmse_m"), path + ".rmse_m"),
-            Double(Need(n, "mae_m", path + ".mae_m"), path + ".mae_m")};
+            Checked(Need(n, "rmse_m", path + ".rmse_m"), path + ".rmse_m", rules::kSpreadM, true),
+            Checked(Need(n, "mae_m", path + ".mae_m"), path + ".mae_m", rules::kSpreadM, true)};
   }
 
  private:
   std::string file_;
 };
+
+constexpr NumberRule kAny{-rules::kInf, rules::kInf, true, true, ""};
+constexpr NumberRule kPositive{0.0, rules::kInf, true, true, ""};
+
+// A covariance of the weights: p x p, finite, variances >= 0 and no correlation beyond 1
+// (|c_ij| <= sqrt(c_ii c_jj)). A negative variance would shrink the margin it widens.
+void CheckCovariance(const Reader& r, const std::vector<std::vector<double>>& c, size_t p,
+                     const std::string& path) {
+  const std::string shape = std::to_string(p) + " x " + std::to_string(p);
+  if (c.size() != p) r.Fail(path, "has " + std::to_string(c.size()) + " rows, expected " + shape);
+  for (size_t i = 0; i < p; ++i) {
+    const std::string row = path + "[" + std::to_string(i) + "]";
+    if (c[i].size() != p)
+      r.Fail(row, "has " + std::to_string(c[i].size()) + " entries, expected " + shape);
+    for (size_t j = 0; j < p; ++j)
+      if (!std::isfinite(c[i][j]))
+        r.Fail(row + "[" + std::to_string(j) + "]", records::NumberText(c[i][j]) +
+                                                        " is not a finite number");
+    if (c[i][i] < 0)
+      r.Fail(row + "[" + std::to_string(i) + "]",
+             records::NumberText(c[i][i]) + " is a negative variance");
+  }
+  for (size_t i = 0; i < p; ++i)
+    for (size_t j = 0; j < i; ++j) {
+      const double bound = std::sqrt(c[i][i] * c[j][j]);
+      const double tol = 1e-9 * (std::fabs(c[i][j]) + std::fabs(c[j][i]) + bound) + 1e-300;
+      if (std::fabs(c[i][j] - c[j][i]) > tol)
+        r.Fail(path, "is not symmetric (entry " + std::to_string(i) + "," + std::to_string(j) +
+                         ": " + records::NumberText(c[i][j]) + " vs " +
+                         records::NumberText(c[j][i]) + ")");
+      if (std::fabs(c[i][j]) > bound * (1 + 1e-6) + 1e-300)
+        r.Fail(path, "entry " + std::to_string(i) + "," + std::to_string(j) + " (" +
+                         records::NumberText(c[i][j]) +
+                         ") exceeds the square root of its variances' product: not a covariance");
+    }
+}
 
 }  // namespace
 
@@ -175,13 +222,7 @@ void WriteWeightsYaml(const std::string& path, const records::BiasWeights& weigh
 
 records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file) {
   const Reader r(file);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw IoError(file + ": not valid YAML (line " + std::to_string(e.mark.line + 1) + ": " +
-                  e.msg + ")");
-  }
+  const YAML::Node root = LoadYaml(text, file);
   if (!root.IsMap()) r.Fail("", "not a depthbias weights file (expected a YAML map)");
   const std::string schema =
       root["schema"] && root["schema"].IsScalar() ? root["schema"].Scalar() : "";
@@ -204,11 +245,13 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
   w.schema = schema;
   w.model = r.String(r.Need(root, "model", "model"), "model");
   if (root["target"]) w.target = r.String(root["target"], "target");
-  w.lambda = r.Double(r.Need(root, "lambda", "lambda"), "lambda");
+  w.lambda = r.Checked(r.Need(root, "lambda", "lambda"), "lambda", rules::kNonNegative);
   if (root["loss"]) w.loss = r.String(root["loss"], "loss");
-  if (root["loss_scale_m"]) w.loss_scale_m = r.Double(root["loss_scale_m"], "loss_scale_m");
-  if (root["focal_px"]) w.focal_px = r.Double(root["focal_px"], "focal_px");
-  if (root["baseline_m"]) w.baseline_m = r.Double(root["baseline_m"], "baseline_m");
+  if (root["loss_scale_m"])
+    w.loss_scale_m = r.Checked(root["loss_scale_m"], "loss_scale_m", kPositive);
+  if (root["focal_px"]) w.focal_px = r.Checked(root["focal_px"], "focal_px", rules::kNonNegative);
+  if (root["baseline_m"])
+    w.baseline_m = r.Checked(root["baseline_m"], "baseline_m", rules::kNonNegative);
   if (root["group_by"]) {
     const YAML::Node gb = root["group_by"];
     if (!gb.IsSequence()) r.Fail("group_by", "expected a list");
@@ -246,18 +289,28 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
     g.preset = r.String(r.Need(gn, "preset", p + ".preset"), p + ".preset");
     if (gn["emitter"]) g.emitter = r.String(gn["emitter"], p + ".emitter");
     g.n = r.Int(r.Need(gn, "n", p + ".n"), p + ".n");
+    if (g.n < 1) r.Fail(p + ".n", std::to_string(g.n) + " rows; a fitted group has at least 1");
     const YAML::Node wn = r.Need(gn, "weights", p + ".weights");
     if (!wn.IsMap() || wn.size() == 0) r.Fail(p + ".weights", "expected a map name: value");
     for (const auto& kv : wn) {
-      const std::string name = kv.first.as<std::string>();
+      const std::string name = r.String(kv.first, p + ".weights");
       g.names.push_back(name);
-      g.values.push_back(r.Double(kv.second, p + ".weights." + name));
+      g.values.push_back(r.Checked(kv.second, p + ".weights." + name, kAny));
     }
-    if (gn["knots_deg"]) g.knots_deg = r.Doubles(gn["knots_deg"], p + ".knots_deg");
-    g.rmse_m = r.Double(r.Need(gn, "rmse_m", p + ".rmse_m"), p + ".rmse_m");
-    g.mae_m = r.Double(r.Need(gn, "mae_m", p + ".mae_m"), p + ".mae_m");
+    if (gn["knots_deg"]) {
+      g.knots_deg = r.Doubles(gn["knots_deg"], p + ".knots_deg");
+      for (size_t k = 0; k < g.knots_deg.size(); ++k) {
+        const std::string why = rules::kAngleDeg.Why(g.knots_deg[k]);
+        if (!why.empty()) r.Fail(p + ".knots_deg[" + std::to_string(k) + "]", why);
+      }
+    }
+    g.rmse_m = r.Checked(r.Need(gn, "rmse_m", p + ".rmse_m"), p + ".rmse_m", rules::kSpreadM, true);
+    g.mae_m = r.Checked(r.Need(gn, "mae_m", p + ".mae_m"), p + ".mae_m", rules::kSpreadM, true);
+    // NaN: the fit had no degrees of freedom left (n <= p) and the scatter is unknown; the
+    // model then claims no margin. A negative or infinite scatter is refused.
     if (gn["residual_std_m"]) {
-      g.residual_std_m = r.Double(gn["residual_std_m"], p + ".residual_std_m");
+      g.residual_std_m =
+          r.Checked(gn["residual_std_m"], p + ".residual_std_m", rules::kSpreadM, true);
     }
     if (const YAML::Node mn = gn["margin"]; mn) {
       const std::string mp = p + ".margin";
@@ -290,6 +343,9 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
       for (size_t k = 0; k < cn.size(); ++k) {
         g.covariance.push_back(r.Doubles(cn[k], p + ".covariance[" + std::to_string(k) + "]"));
       }
+      // An empty list is what the writer gives for an unknown covariance.
+      if (!g.covariance.empty())
+        CheckCovariance(r, g.covariance, g.values.size(), p + ".covariance");
     }
     w.groups.push_back(std::move(g));
   }
@@ -309,7 +365,7 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
 }
 
 records::BiasWeights ReadWeightsYaml(const std::string& path) {
-  return ParseWeightsYaml(ReadFile(path), path);
+  return ParseWeightsYaml(ReadFile(path, kMaxYamlBytes), path);
 }
 
 }  // namespace depthbias::io

@@ -3,7 +3,10 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
+
 #include "model/fit.h"
+#include "records/number_text.h"
 
 namespace depthbias::model {
 namespace {
@@ -45,6 +48,14 @@ ScenarioModel::ScenarioModel(const records::BiasWeightsGroup& group,
                                   "' is not finite");
     }
   }
+  // Input ranges: a negative or infinite scatter, or a covariance that is not one (a negative
+  // variance, asymmetric, not positive semi-definite), would make the margin less conservative
+  // than the fit says. A NaN scatter means unknown (n <= p): PredictiveStdM is then NaN.
+  if (group.residual_std_m < 0 || std::isinf(group.residual_std_m)) {
+    throw std::invalid_argument("group " + label + ": residual_std_m " +
+                                records::NumberText(group.residual_std_m) +
+                                " is not a standard deviation");
+  }
   if (!group.covariance.empty()) {
     const auto p = static_cast<Eigen::Index>(params.size());
     if (static_cast<Eigen::Index>(group.covariance.size()) != p) {
@@ -60,10 +71,27 @@ ScenarioModel::ScenarioModel(const records::BiasWeightsGroup& group,
       }
       for (Eigen::Index j = 0; j < p; ++j) covariance_(i, j) = row[static_cast<size_t>(j)];
     }
+    if (!covariance_.allFinite()) {
+      throw std::invalid_argument("group " + label + ": covariance has a non-finite entry");
+    }
+    const double scale = covariance_.diagonal().cwiseAbs().maxCoeff();
+    if ((covariance_ - covariance_.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
+      throw std::invalid_argument("group " + label + ": covariance is not symmetric");
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(covariance_,
+                                                             Eigen::EigenvaluesOnly);
+    if (covariance_.diagonal().minCoeff() < 0 ||
+        (p > 0 && eig.eigenvalues().minCoeff() < -1e-9 * scale)) {
+      throw std::invalid_argument("group " + label +
+                                  ": covariance is not positive semi-definite (a negative "
+                                  "variance would shrink the margin)");
+    }
   }
 }
 
 double ScenarioModel::FittedBiasM(double depth_m, double angle_deg) const {
+  // Outside the model's domain (no depth, or tan α infinite) there is no prediction.
+  if (!(depth_m > 0) || !std::isfinite(depth_m) || !(std::abs(angle_deg) < 90.0)) return NAN;
   return form_->Bias(group_.values.data(), At(depth_m, angle_deg));
 }
 
@@ -91,8 +119,8 @@ double ScenarioModel::PredictiveStdM(double depth_m, double angle_deg) const {
   double s2 = 0.0;
   if (residual_.known) {
     s2 = residual_.VarianceM2(depth_m);
-  } else if (std::isfinite(group_.residual_std_m)) {
-    s2 = group_.residual_std_m * group_.residual_std_m;
+  } else {
+    s2 = group_.residual_std_m * group_.residual_std_m;  // NaN (unknown): no margin is claimed
   }
   if (covariance_.size() == 0) return std::sqrt(s2);
   const auto g = form_->BiasGradient(group_.values.data(), At(depth_m, angle_deg));

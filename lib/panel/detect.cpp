@@ -1,6 +1,6 @@
 #include "panel/detect.h"
 
-#include "common/text.h"
+#include "records/number_text.h"
 #include "panel/panel_fit.h"
 
 #include <algorithm>
@@ -300,13 +300,13 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
       cand.ring_share = ev.RingShare();
       const double coverage = std::min(cand.width_m / nominal_w, cand.height_m / nominal_h);
       if (coverage < p.min_coverage) {
-        cand.rejected = "its pixels cover only " + common::Text(cand.width_m) + " x " +
-                        common::Text(cand.height_m) + " m of the panel's size";
+        cand.rejected = "its pixels cover only " + records::NumberText(cand.width_m) + " x " +
+                        records::NumberText(cand.height_m) + " m of the panel's size";
       } else if (cand.see_through > p.max_see_through) {
-        cand.rejected = "the background shows through " + common::Text(100 * cand.see_through) +
+        cand.rejected = "the background shows through " + records::NumberText(100 * cand.see_through) +
                         " % of it: not a solid panel";
       } else if (ev.occupied_sides >= 3 || cand.ring_share > p.max_ring_share) {
-        cand.rejected = "the plane continues around it (" + common::Text(100 * cand.ring_share) +
+        cand.rejected = "the plane continues around it (" + records::NumberText(100 * cand.ring_share) +
                         " % of a ring, " + std::to_string(ev.occupied_sides) +
                         " sides): part of a larger surface";
       } else if (cand.facing_deg > p.max_facing_angle_deg) {
@@ -341,8 +341,8 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
     if (best < 0 || det.candidates[k].cost < det.candidates[best].cost) best = static_cast<int>(k);
   }
   if (best < 0) {
-    det.why_not = "no solid, free-standing plane of " + common::Text(nominal_w) + " x " +
-                  common::Text(nominal_h) + " m facing the camera among " +
+    det.why_not = "no solid, free-standing plane of " + records::NumberText(nominal_w) + " x " +
+                  records::NumberText(nominal_h) + " m facing the camera among " +
                   std::to_string(det.candidates.size()) + " planes in " +
                   std::to_string(clusters.size()) + " clusters";
     return det;

@@ -1,4 +1,5 @@
 #include "panel/extract.h"
+#include "panel/pcl_quiet.h"
 
 #include "panel/panel_fit.h"
 
@@ -58,6 +59,7 @@ ExtractResult Fail(ExtractResult* r, const std::string& status, const std::strin
 ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrinsics,
                            const PanelParams& params, const SearchWindow& window,
                            const std::optional<PixelBox>& box) {
+  QuietPcl();
   ExtractResult res;
   std::string why;
   if (!params.IsValid(&why)) {

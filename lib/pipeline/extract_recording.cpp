@@ -1,5 +1,6 @@
 #include "pipeline/extract_recording.h"
 
+#include <new>
 #include <stdexcept>
 
 #include "camera/presets.h"
@@ -49,7 +50,8 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
     m.distance_m = known.distance_m;
     m.angle_deg = known.angle_deg;
   } catch (const std::exception& e) {
-    const std::string what = e.what();
+    const std::string what =
+        dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory while reading it" : e.what();
     m.status = "error";
     m.message = what.rfind(path, 0) == 0 ? what : path + ": " + what;
   }

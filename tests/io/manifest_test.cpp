@@ -52,7 +52,8 @@ TEST(Manifest, ErrorsNameFileAndLine) {
   const std::string bad = ErrorOf("bag,distance_m,angle_deg,light\na.bag,4m,0,daylight\n");
   EXPECT_NE(bad.find("man.csv:2"), std::string::npos) << bad;
   EXPECT_NE(bad.find("distance_m"), std::string::npos) << bad;
-  EXPECT_NE(ErrorOf("bag,distance_m,angle_deg,light\na.bag,-4,0,daylight\n").find("positive"),
+  EXPECT_NE(ErrorOf("bag,distance_m,angle_deg,light\na.bag,-4,0,daylight\n")
+                .find("-4 is outside (0, 1000] m"),
             std::string::npos);
   EXPECT_NE(ErrorOf("bag,distance_m,light\na.bag,4,daylight\n").find("angle_deg"),
             std::string::npos);

@@ -88,24 +88,24 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
     const fs::path effects = d / "effects.yaml";
     Write(effects, c.yaml);
     std::string err;
-    EXPECT_EQ(RunCommand(base + " --effects " + effects.string(), d, &err), 1) << c.yaml;
+    EXPECT_EQ(RunCommand(base + " --effects " + effects.string(), d, &err), 2) << c.yaml;
     EXPECT_NE(err.find(effects.string()), std::string::npos) << err;
     EXPECT_NE(err.find(c.says), std::string::npos) << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
     EXPECT_FALSE(fs::exists(d / "m.csv"));
   }
   std::string err;
-  EXPECT_EQ(RunCommand(base + " --effects " + (d / "missing.yaml").string(), d, &err), 1);
+  EXPECT_EQ(RunCommand(base + " --effects " + (d / "missing.yaml").string(), d, &err), 2);
   EXPECT_NE(err.find("missing.yaml"), std::string::npos) << err;
   const std::string bad_frames =
       Bin("simulate") + " --protocol " + kProtocol + " --frames zero --metrics-only";
-  EXPECT_EQ(RunCommand(bad_frames, d, &err), 1);
+  EXPECT_EQ(RunCommand(bad_frames, d, &err), 2);
   EXPECT_NE(err.find("--frames"), std::string::npos) << err;
   const fs::path protocol = d / "protocol.yaml";
   Write(protocol, "protocol: {distance_is: slant}\n");
   const std::string bad_protocol = Bin("simulate") + " --protocol " + protocol.string() +
                                    " --metrics-only --out " + (d / "m.csv").string();
-  EXPECT_EQ(RunCommand(bad_protocol, d, &err), 1);
+  EXPECT_EQ(RunCommand(bad_protocol, d, &err), 2);
   EXPECT_NE(err.find("protocol.yaml: protocol.distance_is"), std::string::npos) << err;
   // An output that is also an input is refused, and the input left as it was.
   const fs::path kept = d / "kept.yaml";
@@ -113,7 +113,7 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
   EXPECT_EQ(RunCommand(Bin("simulate") + " --protocol " + kept.string() + " --metrics-only --out " +
                            kept.string(),
                        d, &err),
-            1);
+            2);
   EXPECT_NE(err.find("is also an input"), std::string::npos) << err;
   EXPECT_EQ(Read(kept), "protocol: {frames: 2}\n");
   // A file that is not YAML at all is named in one short line.
@@ -122,7 +122,7 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
   EXPECT_EQ(RunCommand(Bin("simulate") + " --protocol " + csv.string() + " --metrics-only --out " +
                            (d / "m.csv").string(),
                        d, &err),
-            1);
+            2);
   EXPECT_NE(err.find("table.csv"), std::string::npos) << err;
   EXPECT_LT(err.size(), 300u) << err;
 }
@@ -193,7 +193,7 @@ TEST(SimulateApp, SensorFromRecordingTakesItsCamera) {
   ASSERT_EQ(RunCommand(Bin("simulate") + " --protocol " + protocol.string() + " --sensor-from " +
                            not_a_bag.string() + " --out-dir " + (d / "bags2").string(),
                        d, &err),
-            1);
+            2);
   EXPECT_NE(err.find("notes.bag"), std::string::npos) << err;
   EXPECT_EQ(err.find('\n'), err.size() - 1) << err;  // one line
   EXPECT_FALSE(fs::exists(d / "bags2"));
