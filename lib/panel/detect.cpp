@@ -305,7 +305,7 @@ PanelDetection DetectPanel(const metrics::RayTable& rays, const DepthAccumulator
       } else if (cand.see_through > p.max_see_through) {
         cand.rejected = "the background shows through " + records::NumberText(100 * cand.see_through) +
                         " % of it: not a solid panel";
-      } else if (ev.occupied_sides >= 3 || cand.ring_share > p.max_ring_share) {
+      } else if (ev.occupied_sides >= 3) {
         cand.rejected = "the plane continues around it (" + records::NumberText(100 * cand.ring_share) +
                         " % of a ring, " + std::to_string(ev.occupied_sides) +
                         " sides): part of a larger surface";

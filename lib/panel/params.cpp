@@ -78,7 +78,6 @@ const std::map<std::string, Setter>& Table() {
       {"edge_weight", D(&PanelParams::edge_weight)},
       {"search_extent", D(&PanelParams::search_extent)},
       {"max_see_through", D(&PanelParams::max_see_through)},
-      {"max_ring_share", D(&PanelParams::max_ring_share)},
       {"ring_width_frac", D(&PanelParams::ring_width_frac)},
       {"min_coverage", D(&PanelParams::min_coverage)},
       {"use_search_window", B(&PanelParams::use_search_window)},
@@ -134,8 +133,8 @@ bool PanelParams::IsValid(std::string* why) const {
     return fail("evidence_sigma_k must be positive, the window weights not negative");
   if (!(search_extent >= 0.25 && search_extent <= 5))
     return fail("search_extent must be in [0.25, 5] panel sizes");
-  if (!(max_see_through > 0 && max_see_through <= 1) || !(max_ring_share > 0 && max_ring_share <= 1))
-    return fail("max_see_through and max_ring_share must be in (0, 1]");
+  if (!(max_see_through > 0 && max_see_through <= 1))
+    return fail("max_see_through must be in (0, 1]");
   if (!(ring_width_frac > 0 && ring_width_frac <= 1)) return fail("ring_width_frac must be in (0, 1]");
   if (!(min_coverage >= 0 && min_coverage <= 1)) return fail("min_coverage must be in [0, 1]");
   if (!(window_distance_frac >= 0) || !(window_distance_m >= 0) || !(window_angle_deg > 0))

@@ -70,12 +70,10 @@ struct PanelParams {
   double search_extent = 0.75;
   // A panel is solid and stands free: a candidate is refused when more than max_see_through of
   // its window's observed pixels show the background or the ground, when the plane continues on
-  // three or four sides of a ring ring_width_frac·size wide around the window or over more than
-  // max_ring_share of it (a wall, a hedge; a person holding the panel or its stand take one or
-  // two sides), or when the plane's pixels cover less than min_coverage of its width or
+  // three or four sides of a ring ring_width_frac·size wide around the window (a wall, a hedge;
+  // a person holding the panel or its stand take one or two sides), or when the plane's pixels cover less than min_coverage of its width or
   // height (a smaller object).
   double max_see_through = 0.25;
-  double max_ring_share = 0.6;
   double ring_width_frac = 0.15;
   double min_coverage = 0.6;
 
