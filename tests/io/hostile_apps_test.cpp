@@ -239,7 +239,7 @@ TEST(HostileApps, NoOutputLandsOnAnInputOrReplacesADevice) {
   // /dev/stdout redirected to a file: the shell's file gets the table.
   const AppRun to_stdout = Exec("fit_bias", "--in " + kArticle + " --out /dev/stdout --cv none", d);
   EXPECT_EQ(to_stdout.code, 0) << to_stdout.err;
-  EXPECT_TRUE(Has(to_stdout.out, "schema: depthbias.weights/1")) << to_stdout.out;
+  EXPECT_TRUE(Has(to_stdout.out, "schema: depthbias.weights/2")) << to_stdout.out;
 }
 
 // ---------------------------------------------------------------- class 5
@@ -357,6 +357,10 @@ TEST(HostileApps, AbsurdNumbersAreRefusedNotPassedOn) {
   for (size_t at = unknown.find("residual_std_m: "); at != std::string::npos;
        at = unknown.find("residual_std_m: ", at + 1))
     unknown.replace(at + 16, unknown.find('\n', at) - at - 16, ".nan");
+  // ... and no fitted residual model (schema 2's margin:), which would otherwise stand in.
+  for (size_t at = unknown.find("    margin: {"); at != std::string::npos;
+       at = unknown.find("    margin: {", at))
+    unknown.erase(at, unknown.find('\n', at) - at + 1);
   Put(d / "nan.yaml", unknown);
   const AppRun nan_run = Exec("correct_depth", "--weights " + (d / "nan.yaml").string() + " --in " +
                                                 (d / "m.csv").string() + " --out " +
