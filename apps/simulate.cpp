@@ -13,6 +13,7 @@
 
 #include "args.h"
 #include "camera/presets.h"
+#include "gap/calibrate.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
 #include "io/csv.h"
@@ -20,7 +21,6 @@
 #include "io/metrics_csv.h"
 #include "io/temp_files.h"
 #include "io/yaml_limits.h"
-#include "sim/calibrate.h"
 #include "sim/config_yaml.h"
 #include "sim/render_protocol.h"
 
@@ -152,19 +152,19 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
 
 void Calibrate(const sim::SimParams& params, const std::string& real_csv,
                const std::string& out, const sim::MetricsParams& metrics) {
-  sim::CalibrateParams cp;
+  gap::CalibrateParams cp;
   cp.metrics = metrics;
-  const sim::CalibrationResult r =
-      sim::CalibrateSensor(params, io::ReadMetricsCsv(real_csv), cp);
+  const gap::CalibrationResult r =
+      gap::CalibrateSensor(params, io::ReadMetricsCsv(real_csv), cp);
   if (!r.success) throw Fail(real_csv + ": calibration failed: " + r.message);
-  std::fputs(sim::FormatCalibration(r).c_str(), stdout);
+  std::fputs(gap::FormatCalibration(r).c_str(), stdout);
   io::WriteFileAtomic(
       out, sim::FormatSensorYaml(
                r.sensor,
                {"D455 base sensor calibrated by simulate --calibrate-to " +
                     io::BaseName(real_csv) + " (per scenario: sigma_d_px, invalid_prob)",
                 "fitted to plane_std_m (relative) and valid_pct over every recording"},
-               sim::CalibrationYaml(r, io::BaseName(real_csv))));
+               gap::CalibrationYaml(r, io::BaseName(real_csv))));
 }
 
 // The camera of a real recording: its depth intrinsics (rectified: distortion is dropped, with a

@@ -94,6 +94,25 @@ std::vector<EffectInfo> MakeRegistry() {
                  const double rate = p.at("rate_px_per_s");
                  d->disparity_over_time.push_back([rate](double t_s) { return rate * t_s; });
                }});
+  r.push_back({"region_spill",
+               "the panel's region is drawn larger than the panel (by hand, or a detector's box "
+               "with a margin), so it takes in pixels of what lies behind the panel; a "
+               "background within range (the field, trees, the ground beyond) gives them valid, "
+               "far depths, the more so with a permissive preset",
+               "mean pulled far from the median: a share q of the valid samples sits at the "
+               "background's depth r·Z, mean − median ≈ q·(r − 1)·Z, q ∝ w/(panel size in px) "
+               "∝ w·Z, so it grows with distance; plane_std and panel_width up; the median "
+               "moves far only when q nears one half; none for w = 0",
+               {{"width_px", 2.0, 0.0, 5.0, "px",
+                 "how far the region reaches beyond the panel's outline, whole pixels (floor; at "
+                 "most 5: the metrics-only path renders the panel's box padded by the edge band "
+                 "+ 3 px)"},
+                {"background_rel", 2.0, 1.05, 5.0, "1",
+                 "depth of the background behind the panel over the panel's depth"}},
+               [](const std::map<std::string, double>& p, Departures* d) {
+                 d->region_spill_px += std::floor(p.at("width_px"));
+                 d->background_depth_rel = p.at("background_rel");
+               }});
   return r;
 }
 

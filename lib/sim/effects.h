@@ -22,6 +22,10 @@ struct Departures {
   double depth_scale = 1.0;        // multiplies every reported depth
   double edge_mix_width_px = 0.0;  // pixels this near a depth edge mix with its other side
   double edge_mix_strength = 0.0;  // largest mixing fraction, drawn uniformly per pixel and frame
+  // Measurement region and background (region_spill).
+  double region_spill_px = 0.0;       // the panel's region reaches this far beyond its outline [px]
+  double background_depth_rel = 0.0;  // > 0: the background behind the panel at this multiple of
+                                      // the panel's depth (its forward distance); 0: the scene's
   // Additive disparity terms [px]: static ones of the pixel's normalized ray (x/z, y/z), and
   // ones of the time since the recording's first frame [s].
   std::vector<std::function<double(double x_normalized, double y_normalized)>> static_disparity;

@@ -117,8 +117,9 @@ bool SimParams::IsValid(std::string* why) const {
   if (!protocol.IsValid(why)) return false;
   if (!sensor.IsValid(why)) return false;
   if (!(departures.sigma_gain >= 0) || !(departures.invalid_odds_gain >= 0) ||
-      !(departures.depth_scale > 0)) {
-    if (why) *why = "effects: gains must be >= 0 and the depth scale > 0";
+      !(departures.depth_scale > 0) || !(departures.region_spill_px >= 0) ||
+      !(departures.background_depth_rel >= 0)) {
+    if (why) *why = "effects: gains, spill and background must be >= 0 and the depth scale > 0";
     return false;
   }
   return true;
@@ -181,10 +182,13 @@ void StereoSim::Build() {
         static_cast<std::uint16_t>(std::min(65535.0, std::round(depth_m / s.depth_units_m)));
   }
 
-  // True depth by ray casting.
+  // True depth by ray casting (region_spill may bring the background nearer).
   const int w = window_.width, h = window_.height;
   const size_t n = static_cast<size_t>(w) * h;
-  RayCaster caster(params_.protocol.scene, truth_.panel);
+  SceneParams scene = params_.protocol.scene;
+  if (dep.background_depth_rel > 0)
+    scene.background_distance_m = dep.background_depth_rel * truth_.panel_depth_m;
+  RayCaster caster(scene, truth_.panel);
   true_depth_m_.assign(n, 0.f);
   surface_.assign(n, 0);
   std::vector<float> texture(n, 0.f), disparity(n, 0.f);
@@ -449,8 +453,14 @@ metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose) {
 }
 
 PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out) const {
-  metrics::PanelRegion region = metrics::RegionFromRectangle(
-      params_.sensor.intrinsics, PanelRectangleOf(truth_.panel), margin_px);
+  metrics::PanelRectangle rect = PanelRectangleOf(truth_.panel);
+  if (params_.departures.region_spill_px > 0) {  // region_spill: the region drawn larger
+    const Eigen::Vector2d foot = metrics::PixelFootprint(params_.sensor.intrinsics, rect);
+    rect.width_m += 2 * params_.departures.region_spill_px * foot.x();
+    rect.height_m += 2 * params_.departures.region_spill_px * foot.y();
+  }
+  metrics::PanelRegion region =
+      metrics::RegionFromRectangle(params_.sensor.intrinsics, rect, margin_px);
   const int width = params_.sensor.intrinsics.width;
   PixelList pixels;
   std::vector<std::uint32_t> kept;

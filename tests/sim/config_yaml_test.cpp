@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "sim/calibrate.h"
+#include "gap/calibrate.h"
 #include "sim/config_yaml.h"
 
 namespace depthbias::sim {
@@ -45,7 +45,7 @@ TEST(ConfigYaml, CommittedCalibratedSensorLoadsWithEveryScenario) {
       const ScenarioParams sc = s.Scenario(light, preset, &found);
       EXPECT_TRUE(found) << light << " " << preset;
       EXPECT_GT(sc.sigma_d_px, 0.0);
-      EXPECT_LE(sc.sigma_d_px, CalibrateParams{}.max_sigma_d_px + 1e-9);
+      EXPECT_LE(sc.sigma_d_px, gap::CalibrateParams{}.max_sigma_d_px + 1e-9);
     }
 }
 

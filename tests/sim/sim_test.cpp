@@ -336,7 +336,7 @@ TEST(Effects, RegistryRefusesUnknownNamesParametersAndBounds) {
     EXPECT_FALSE(e.params.empty()) << e.name;
     EXPECT_TRUE(BuildDepartures({{e.name, {}}}, &d, &why)) << e.name << ": " << why;
   }
-  EXPECT_EQ(EffectRegistry().size(), 9u);
+  EXPECT_EQ(EffectRegistry().size(), 10u);
 }
 
 TEST(StereoSim, RefusesInvalidParameters) {

@@ -1,4 +1,4 @@
-#include "sim/calibrate.h"
+#include "gap/calibrate.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 
 #include <ceres/ceres.h>
 
-namespace depthbias::sim {
+namespace depthbias::gap {
 namespace {
 
 constexpr double kLogitShift = 5.0;  // keeps logit p away from 0 for Ceres' relative steps
@@ -23,32 +23,32 @@ double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 // The recordings of one scenario, and the residuals of a candidate (log σ_d, logit p + shift).
 class ScenarioResiduals {
  public:
-  ScenarioResiduals(const SimParams& base, std::vector<Cell> cells,
+  ScenarioResiduals(const sim::SimParams& base, std::vector<sim::Cell> cells,
                     std::vector<records::PanelMetrics> real, const CalibrateParams& cp)
       : base_(base), cells_(std::move(cells)), real_(std::move(real)), cp_(cp) {}
 
   int num_residuals() const { return 2 * static_cast<int>(cells_.size()); }
 
-  static ScenarioParams Decode(const double* x, const ScenarioParams& like) {
-    ScenarioParams s = like;
+  static sim::ScenarioParams Decode(const double* x, const sim::ScenarioParams& like) {
+    sim::ScenarioParams s = like;
     s.sigma_d_px = std::exp(x[0]);
     s.invalid_prob = Logistic(x[1] - kLogitShift);
     return s;
   }
 
   // Simulated metrics of every recording under scenario s.
-  std::vector<records::PanelMetrics> Simulate(const ScenarioParams& s) const {
-    SimParams p = base_;
+  std::vector<records::PanelMetrics> Simulate(const sim::ScenarioParams& s) const {
+    sim::SimParams p = base_;
     p.sensor.scenarios = {s};
-    MetricsParams mp = cp_.metrics;
+    sim::MetricsParams mp = cp_.metrics;
     mp.frames = cp_.frames;
     std::vector<records::PanelMetrics> out;
-    for (auto& r : SimulateCellsMetrics(p, cells_, mp)) out.push_back(r.metrics);
+    for (auto& r : sim::SimulateCellsMetrics(p, cells_, mp)) out.push_back(r.metrics);
     return out;
   }
 
   bool operator()(double const* const* x, double* residuals) const {
-    const ScenarioParams s = Decode(x[0], scenario_);
+    const sim::ScenarioParams s = Decode(x[0], scenario_);
     if (!std::isfinite(s.sigma_d_px)) return false;
     const std::vector<records::PanelMetrics> sim = Simulate(s);
     for (size_t i = 0; i < cells_.size(); ++i) {
@@ -65,16 +65,16 @@ class ScenarioResiduals {
     return true;
   }
 
-  void set_scenario(const ScenarioParams& s) { scenario_ = s; }
-  const std::vector<Cell>& cells() const { return cells_; }
+  void set_scenario(const sim::ScenarioParams& s) { scenario_ = s; }
+  const std::vector<sim::Cell>& cells() const { return cells_; }
   const std::vector<records::PanelMetrics>& real() const { return real_; }
 
  private:
-  SimParams base_;
-  std::vector<Cell> cells_;
+  sim::SimParams base_;
+  std::vector<sim::Cell> cells_;
   std::vector<records::PanelMetrics> real_;
   CalibrateParams cp_;
-  ScenarioParams scenario_;
+  sim::ScenarioParams scenario_;
 };
 
 std::string Num(double v, int precision = 6) {
@@ -98,7 +98,7 @@ bool CalibrateParams::IsValid(std::string* why) const {
   return metrics.IsValid(why);
 }
 
-CalibrationResult CalibrateSensor(const SimParams& params,
+CalibrationResult CalibrateSensor(const sim::SimParams& params,
                                   const std::vector<records::PanelMetrics>& real,
                                   const CalibrateParams& cp) {
   CalibrationResult result;
@@ -111,7 +111,7 @@ CalibrationResult CalibrateSensor(const SimParams& params,
 
   // Group the usable rows by scenario, in first-seen order.
   std::vector<std::pair<std::string, std::string>> order;
-  std::map<std::pair<std::string, std::string>, std::pair<std::vector<Cell>,
+  std::map<std::pair<std::string, std::string>, std::pair<std::vector<sim::Cell>,
                                                           std::vector<records::PanelMetrics>>>
       groups;
   for (const auto& row : real) {
@@ -122,13 +122,13 @@ CalibrationResult CalibrateSensor(const SimParams& params,
       ++result.rows_skipped;
       continue;
     }
-    Cell c;
+    sim::Cell c;
     c.distance_m = row.distance_m;
     c.angle_deg = row.angle_deg;
     c.preset = row.preset;
     c.emitter_on = row.emitter == "on";
     c.light = row.light;
-    c.name = CellName(c);
+    c.name = sim::CellName(c);
     const auto key = std::make_pair(row.light, row.preset);
     if (!groups.count(key)) order.push_back(key);
     groups[key].first.push_back(c);
@@ -281,4 +281,4 @@ std::string CalibrationYaml(const CalibrationResult& r, const std::string& sourc
   return o.str();
 }
 
-}  // namespace depthbias::sim
+}  // namespace depthbias::gap

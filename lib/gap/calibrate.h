@@ -15,7 +15,7 @@
 #include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
 
-namespace depthbias::sim {
+namespace depthbias::gap {
 
 struct CalibrateParams {
   int frames = 10;                 // simulated frames per recording while fitting
@@ -26,7 +26,7 @@ struct CalibrateParams {
   // (σ_Z = Z²·σ_d/(f·B) > 0.6 m): the plane fit turns sideways and plane_std saturates near the
   // panel's own extent, a degenerate optimum that flat real plane_std values would pull towards.
   double max_sigma_d_px = 0.15;
-  MetricsParams metrics;
+  sim::MetricsParams metrics;
 
   bool IsValid(std::string* why) const;
 };
@@ -44,8 +44,8 @@ struct CalibrationCell {
 };
 
 struct ScenarioFit {
-  ScenarioParams initial;
-  ScenarioParams fitted;
+  sim::ScenarioParams initial;
+  sim::ScenarioParams fitted;
   int recordings = 0;             // rows used
   bool converged = false;
   int iterations = 0;
@@ -62,7 +62,7 @@ struct ScenarioFit {
 struct CalibrationResult {
   bool success = false;
   std::string message;            // why not, or notes (rows skipped)
-  SensorParams sensor;            // the input sensor with the fitted scenarios
+  sim::SensorParams sensor;            // the input sensor with the fitted scenarios
   std::vector<ScenarioFit> scenarios;
   int rows_used = 0;
   int rows_skipped = 0;
@@ -70,7 +70,7 @@ struct CalibrationResult {
 
 // Fits every (light, preset) the real table holds. The protocol's scene and distance meaning,
 // the effects and the seed in params are used as given; params.sensor's scenarios are the start.
-CalibrationResult CalibrateSensor(const SimParams& params,
+CalibrationResult CalibrateSensor(const sim::SimParams& params,
                                   const std::vector<records::PanelMetrics>& real,
                                   const CalibrateParams& calibrate = {});
 
@@ -81,4 +81,4 @@ std::string FormatCalibration(const CalibrationResult& result);
 // The fit as YAML (a top-level calibration: block) for the sensor file's record.
 std::string CalibrationYaml(const CalibrationResult& result, const std::string& source);
 
-}  // namespace depthbias::sim
+}  // namespace depthbias::gap

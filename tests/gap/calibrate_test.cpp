@@ -1,13 +1,13 @@
 // Calibration recovers the noise and hole probability that made a table.
 #include <gtest/gtest.h>
 
-#include "sim/calibrate.h"
+#include "gap/calibrate.h"
 
-namespace depthbias::sim {
+namespace depthbias::gap {
 namespace {
 
 TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
-  SimParams truth;
+  sim::SimParams truth;
   truth.seed = 3;
   truth.sensor.scenarios = {{"daylight", "HA", 0.06, 0.4}, {"sunset", "HD", 0.09, 0.15}};
   truth.protocol.distances_m = {4, 8, 12};
@@ -15,18 +15,18 @@ TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
   truth.protocol.emitters = {false};
   truth.protocol.presets = {"HA", "HD"};
   std::vector<records::PanelMetrics> table;
-  MetricsParams mp;
+  sim::MetricsParams mp;
   mp.frames = CalibrateParams{}.frames;
-  for (const Cell& c : MakeCells(truth.protocol)) {
+  for (const sim::Cell& c : sim::MakeCells(truth.protocol)) {
     if ((c.light == "daylight") != (c.preset == "HA")) continue;
-    table.push_back(SimulateMetrics(truth, c, mp).metrics);
+    table.push_back(sim::SimulateMetrics(truth, c, mp).metrics);
   }
   ASSERT_EQ(table.size(), 12u);
   records::PanelMetrics broken = table[0];
   broken.status = "no_panel";
   table.push_back(broken);
 
-  SimParams start = truth;
+  sim::SimParams start = truth;
   start.sensor.scenarios.clear();  // start from the fallback: σ_d 0.08 px, p 0.2
   const CalibrationResult r = CalibrateSensor(start, table);
   ASSERT_TRUE(r.success) << r.message;
@@ -34,7 +34,7 @@ TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
   EXPECT_EQ(r.rows_skipped, 1);
   ASSERT_EQ(r.scenarios.size(), 2u);
   for (const auto& fit : r.scenarios) {
-    const ScenarioParams want = truth.sensor.Scenario(fit.fitted.light, fit.fitted.preset);
+    const sim::ScenarioParams want = truth.sensor.Scenario(fit.fitted.light, fit.fitted.preset);
     EXPECT_NEAR(fit.fitted.sigma_d_px, want.sigma_d_px, 0.03 * want.sigma_d_px)
         << fit.fitted.light << " " << fit.report;
     EXPECT_NEAR(fit.fitted.invalid_prob, want.invalid_prob, 0.01) << fit.fitted.light;
@@ -51,10 +51,10 @@ TEST(Calibrate, RecoversTheScenarioThatMadeTheTable) {
 TEST(Calibrate, SaysWhyWithoutUsableRows) {
   records::PanelMetrics row;
   row.status = "error";
-  const CalibrationResult r = CalibrateSensor(SimParams{}, {row});
+  const CalibrationResult r = CalibrateSensor(sim::SimParams{}, {row});
   EXPECT_FALSE(r.success);
   EXPECT_NE(r.message.find("no usable rows"), std::string::npos) << r.message;
 }
 
 }  // namespace
-}  // namespace depthbias::sim
+}  // namespace depthbias::gap

@@ -1,0 +1,137 @@
+#include "gap/candidates.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace depthbias::gap {
+namespace {
+
+Axis Continuous(const std::string& param, std::vector<double> nodes, double neutral,
+                double reference) {
+  Axis a;
+  a.param = param;
+  a.nodes = std::move(nodes);
+  a.neutral = neutral;
+  a.reference = reference;
+  return a;
+}
+
+// The grids: wide enough for what an outdoor D455 shows (the article's sunset HA rows read up to
+// 1.9 m far at 16 m: a disparity offset near −0.5 px), dense near the neutral value so that a
+// small effect is resolved. Gains are interpolated in their logarithm.
+std::vector<Candidate> MakeCandidates() {
+  std::vector<Candidate> c;
+  c.push_back({"disparity_offset",
+               {Continuous("delta_px", {-1, -0.5, -0.25, -0.1, -0.04, 0, 0.04, 0.1, 0.25, 0.5, 1},
+                           0, 0.1)}});
+  c.push_back({"depth_scale",
+               {Continuous("scale_rel", {-0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12},
+                           0, 0.02)}});
+  c.push_back({"range_vs_depth", {Continuous("weight", {0, 0.15, 0.4, 0.7, 1.0}, 0, 0.5)}});
+  c.push_back({"radial_disparity_residual",
+               {Continuous("k_px", {-1.5, -0.6, -0.25, -0.08, 0, 0.08, 0.25, 0.6, 1.5}, 0, 0.3)}});
+  Axis noise = Continuous("gain", {0.4, 0.6, 0.8, 1, 1.2, 1.45, 1.8, 2.5}, 1, 1.5);
+  noise.log_scale = true;
+  c.push_back({"disparity_noise_gain", {noise}});
+  Axis holes = Continuous("gain", {0.25, 0.5, 1, 1.6, 2.6, 4.5, 9}, 1, 2);
+  holes.log_scale = true;
+  c.push_back({"invalidation_gain", {holes}});
+  c.push_back({"panel_tilt",
+               {Continuous("yaw_deg", {-40, -25, -14, -6, 0, 6, 14, 25, 40}, 0, 20)}});
+  c.push_back({"temporal_drift",
+               {Continuous("rate_px_per_s", {-1, -0.55, -0.25, 0, 0.25, 0.55, 1}, 0, 0.5)}});
+  Axis width = Continuous("width_px", {1, 2, 3, 5, 8}, NAN, 3);
+  width.discrete = true;
+  c.push_back({"edge_mixing", {width, Continuous("strength", {0, 0.3, 0.65, 1.0}, 0, 0.5)}});
+  Axis spill = Continuous("width_px", {0, 1, 2, 3, 4, 5}, 0, 2);
+  spill.discrete = true;
+  c.push_back({"region_spill",
+               {spill, Continuous("background_rel", {1.3, 1.7, 2.2, 2.8, 3.6}, NAN, 2.2)}});
+  return c;
+}
+
+}  // namespace
+
+bool Candidate::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = "candidate " + effect + ": " + m;
+    return false;
+  };
+  const sim::EffectInfo* info = sim::FindEffect(effect);
+  if (!info) return fail("not in the effects registry");
+  if (axes.empty() || axes.size() > 2) return fail("needs one or two axes");
+  if (axes.size() != info->params.size()) return fail("an axis per parameter of the effect");
+  for (const Axis& a : axes) {
+    const sim::EffectParamInfo* p = nullptr;
+    for (const auto& q : info->params)
+      if (q.name == a.param) p = &q;
+    if (!p) return fail("no parameter " + a.param);
+    if (a.nodes.size() < 2) return fail(a.param + ": at least two nodes");
+    for (size_t i = 0; i < a.nodes.size(); ++i) {
+      if (a.nodes[i] < p->min_value || a.nodes[i] > p->max_value)
+        return fail(a.param + ": a node outside the parameter's bounds");
+      if (i > 0 && !(a.nodes[i] > a.nodes[i - 1])) return fail(a.param + ": nodes must ascend");
+      if (a.log_scale && !(a.nodes[i] > 0)) return fail(a.param + ": log-scale nodes must be > 0");
+    }
+    if (std::isfinite(a.neutral)) {
+      bool found = false;
+      for (double v : a.nodes) found = found || v == a.neutral;
+      if (!found) return fail(a.param + ": the neutral value must be a node");
+    }
+  }
+  bool presence = false;
+  for (const Axis& a : axes) presence = presence || std::isfinite(a.neutral);
+  if (!presence) return fail("one axis must have a neutral value");
+  return true;
+}
+
+std::vector<Candidate> DefaultCandidates() { return MakeCandidates(); }
+
+bool SelectCandidates(const std::string& list, std::vector<Candidate>* out, std::string* why) {
+  const std::vector<Candidate> all = MakeCandidates();
+  if (list == "all" || list.empty()) {
+    *out = all;
+    return true;
+  }
+  std::vector<Candidate> chosen;
+  std::stringstream s(list);
+  std::string name;
+  while (std::getline(s, name, ',')) {
+    const Candidate* found = nullptr;
+    for (const Candidate& c : all)
+      if (c.effect == name) found = &c;
+    if (!found) {
+      std::string known;
+      for (const Candidate& c : all) known += (known.empty() ? "" : ", ") + c.effect;
+      if (why) *why = "candidates: unknown effect '" + name + "'; known: " + known;
+      return false;
+    }
+    for (const Candidate& c : chosen)
+      if (c.effect == name) {
+        if (why) *why = "candidates: " + name + " named twice";
+        return false;
+      }
+    chosen.push_back(*found);
+  }
+  if (chosen.empty()) {
+    if (why) *why = "candidates: the list is empty";
+    return false;
+  }
+  *out = std::move(chosen);
+  return true;
+}
+
+sim::EffectSpec SpecAt(const Candidate& c, const std::vector<double>& values) {
+  sim::EffectSpec spec;
+  spec.name = c.effect;
+  for (size_t i = 0; i < c.axes.size(); ++i) spec.params[c.axes[i].param] = values[i];
+  return spec;
+}
+
+bool IsNeutral(const Candidate& c, const std::vector<double>& values) {
+  for (size_t i = 0; i < c.axes.size(); ++i)
+    if (std::isfinite(c.axes[i].neutral) && values[i] == c.axes[i].neutral) return true;
+  return false;
+}
+
+}  // namespace depthbias::gap

@@ -1,0 +1,221 @@
+#include "gap/design.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace depthbias::gap {
+namespace {
+
+const MetricInfo kMetrics[kNumMetrics] = {
+    {"median_bias_m", "m", "median depth − nominal distance", 2.0, 0.002, true,
+     MetricInfo::kDisparityStep},
+    {"mean_minus_median_m", "m", "mean − median depth (far tail of the region's samples)", 2.0,
+     0.002, true, MetricInfo::kDisparityStep},
+    {"log_plane_std", "log", "log of plane_std_m (spread about the panel's plane)", 0.0, 0.005,
+     true, MetricInfo::kNone},
+    {"valid_pct", "points", "share of valid samples in the region", 0.0, 0.1, true,
+     MetricInfo::kNone},
+    {"log_temporal_std", "log", "log of temporal_std_m (per-pixel spread over time)", 0.0, 0.005,
+     false, MetricInfo::kRelativeStep},
+    {"normal_tilt_deg", "deg", "angle of the fitted panel normal to the optical axis", 1.0, 0.05,
+     false, MetricInfo::kNone},
+    {"panel_width_m", "m", "width of the panel found", 1.0, 0.002, false, MetricInfo::kPixel},
+};
+
+std::string Where(const records::PanelMetrics& row, size_t index) {
+  return "row " + std::to_string(index + 1) + " (" + row.bag + ")";
+}
+
+double Log(double v) { return std::isfinite(v) && v > 0 ? std::log(v) : NAN; }
+
+}  // namespace
+
+const MetricInfo& InfoOf(int metric) { return kMetrics[metric]; }
+
+double MetricValue(const records::PanelMetrics& r, int metric) {
+  switch (metric) {
+    case kMedianBias: return r.median_m - r.distance_m;
+    case kMeanMinusMedian: return r.mean_m - r.median_m;
+    case kPlaneStd: return Log(r.plane_std_m);
+    case kValidPct: return r.valid_pct;
+    case kTemporalStd: return Log(r.temporal_std_m);
+    case kNormalTilt: return r.normal_tilt_deg;
+    case kPanelWidth: return r.panel_width_m;
+    default: return NAN;
+  }
+}
+
+double NoiseShape(int metric, double depth_m) {
+  return std::pow(std::max(depth_m, 0.1) / 10.0, kMetrics[metric].noise_exponent);
+}
+
+double QuantizationRms(int metric, double depth_m, double focal_px, double baseline_m,
+                       double step_px, double value) {
+  const double q = depth_m * depth_m * step_px / (focal_px * baseline_m);
+  switch (kMetrics[metric].quantum) {
+    case MetricInfo::kDisparityStep:
+      return q / std::sqrt(12.0);
+    case MetricInfo::kRelativeStep:
+      return std::isfinite(value) ? q / std::exp(value) / std::sqrt(12.0) : 0.0;
+    case MetricInfo::kPixel:
+      return depth_m / focal_px * std::sqrt(2.0 / 12.0);
+    default:
+      return 0.0;
+  }
+}
+
+bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
+                 std::string* why) {
+  Design d;
+  std::vector<const records::PanelMetrics*> used;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const records::PanelMetrics& r = rows[i];
+    if (!r.ok()) {
+      d.skipped.push_back(Where(r, i) + ": status " + r.status);
+      continue;
+    }
+    const std::pair<const char*, double> needed[] = {
+        {"distance_m", r.distance_m}, {"angle_deg", r.angle_deg},     {"mean_m", r.mean_m},
+        {"median_m", r.median_m},     {"plane_std_m", r.plane_std_m}, {"valid_pct", r.valid_pct}};
+    for (const auto& [name, value] : needed) {
+      if (!std::isfinite(value)) {
+        if (why) *why = Where(r, i) + ": " + name + " is not a number";
+        return false;
+      }
+    }
+    if (!(r.distance_m > 0) || !(r.plane_std_m > 0) || r.valid_pct < 0 || r.valid_pct > 100 ||
+        std::fabs(r.angle_deg) >= 80) {
+      if (why)
+        *why = Where(r, i) +
+               ": needs distance_m > 0, plane_std_m > 0, valid_pct in [0, 100], |angle_deg| < 80";
+      return false;
+    }
+    if (r.emitter != "on" && r.emitter != "off") {
+      if (why) *why = Where(r, i) + ": emitter must be on or off, not '" + r.emitter + "'";
+      return false;
+    }
+    if (r.light.empty() || r.preset.empty()) {
+      if (why) *why = Where(r, i) + ": light and preset must not be empty";
+      return false;
+    }
+    sim::Cell c;
+    c.distance_m = r.distance_m;
+    c.angle_deg = r.angle_deg;
+    c.preset = r.preset;
+    c.light = r.light;
+    c.emitter_on = r.emitter == "on";
+    c.name = sim::CellName(c);
+    const std::string scenario = r.light + "/" + r.preset;
+    auto it = std::find(d.scenario_names.begin(), d.scenario_names.end(), scenario);
+    d.scenario.push_back(static_cast<int>(it - d.scenario_names.begin()));
+    if (it == d.scenario_names.end()) d.scenario_names.push_back(scenario);
+    d.cells.push_back(c);
+    d.row.push_back(static_cast<int>(i));
+    d.bag.push_back(r.bag);
+    used.push_back(&r);
+  }
+  if (used.empty()) {
+    if (why) *why = rows.empty() ? "the table has no rows" : "no row has status ok";
+    return false;
+  }
+  for (int m = 0; m < kNumMetrics; ++m) {
+    int finite = 0;
+    for (const auto* r : used) finite += std::isfinite(MetricValue(*r, m)) ? 1 : 0;
+    if (kMetrics[m].core || finite >= 0.9 * static_cast<double>(used.size()))
+      d.metrics.push_back(m);
+  }
+  const size_t k = d.metrics.size();
+  d.real.assign(used.size() * k, NAN);
+  for (size_t c = 0; c < used.size(); ++c)
+    for (size_t j = 0; j < k; ++j) d.real[c * k + j] = MetricValue(*used[c], d.metrics[j]);
+
+  // Replicates: the emitter on and off rows of one test point (first of each when repeated).
+  std::map<std::string, std::array<int, 2>> points;
+  for (int c = 0; c < d.num_cells(); ++c) {
+    const sim::Cell& cell = d.cells[c];
+    std::ostringstream key;
+    key << cell.light << '|' << cell.preset << '|' << cell.distance_m << '|' << cell.angle_deg;
+    auto& p = points.try_emplace(key.str(), std::array<int, 2>{-1, -1}).first->second;
+    int& slot = p[cell.emitter_on ? 0 : 1];
+    if (slot < 0) slot = c;
+  }
+  for (const auto& [key, p] : points)
+    if (p[0] >= 0 && p[1] >= 0) d.pairs.push_back(p);
+  *design = std::move(d);
+  return true;
+}
+
+bool ParseHoldout(const std::string& text, Holdout* h, std::string* why) {
+  Holdout out;
+  if (text == "distance") {
+    out.kind = HoldoutKind::kDistance;
+  } else if (text == "point") {
+    out.kind = HoldoutKind::kPoint;
+  } else if (text.rfind("light=", 0) == 0 && text.size() > 6) {
+    out.kind = HoldoutKind::kLight;
+    out.value = text.substr(6);
+  } else if (text.rfind("preset=", 0) == 0 && text.size() > 7) {
+    out.kind = HoldoutKind::kPreset;
+    out.value = text.substr(7);
+  } else {
+    if (why) *why = "holdout '" + text + "': use distance, point, light=V or preset=V";
+    return false;
+  }
+  *h = out;
+  return true;
+}
+
+std::string HoldoutName(const Holdout& h) {
+  switch (h.kind) {
+    case HoldoutKind::kDistance: return "distance";
+    case HoldoutKind::kPoint: return "point";
+    case HoldoutKind::kLight: return "light=" + h.value;
+    case HoldoutKind::kPreset: return "preset=" + h.value;
+  }
+  return "";
+}
+
+bool Folds(const Design& d, const Holdout& h, std::vector<int>* fold, int* num_folds,
+           std::string* why) {
+  fold->assign(d.cells.size(), -1);
+  if (h.kind == HoldoutKind::kLight || h.kind == HoldoutKind::kPreset) {
+    int held = 0;
+    for (size_t c = 0; c < d.cells.size(); ++c) {
+      const std::string& v =
+          h.kind == HoldoutKind::kLight ? d.cells[c].light : d.cells[c].preset;
+      if (v == h.value) {
+        (*fold)[c] = 0;
+        ++held;
+      }
+    }
+    *num_folds = 1;
+    if (held == 0 || held == static_cast<int>(d.cells.size())) {
+      if (why)
+        *why = "holdout " + HoldoutName(h) +
+               (held == 0 ? ": no row has that value" : ": every row has that value");
+      return false;
+    }
+    return true;
+  }
+  std::map<std::pair<double, double>, int> keys;
+  for (const sim::Cell& c : d.cells)
+    keys.emplace(std::make_pair(c.distance_m,
+                                h.kind == HoldoutKind::kPoint ? c.angle_deg : 0.0),
+                 0);
+  int i = 0;
+  for (auto& [key, id] : keys) id = i++;
+  *num_folds = i;
+  if (i < 2) {
+    if (why) *why = "holdout " + HoldoutName(h) + ": the table has only one " + HoldoutName(h);
+    return false;
+  }
+  for (size_t c = 0; c < d.cells.size(); ++c)
+    (*fold)[c] = keys.at(std::make_pair(
+        d.cells[c].distance_m, h.kind == HoldoutKind::kPoint ? d.cells[c].angle_deg : 0.0));
+  return true;
+}
+
+}  // namespace depthbias::gap

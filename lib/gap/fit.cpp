@@ -1,0 +1,672 @@
+#include "gap/fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include <Eigen/Dense>
+#include <ceres/ceres.h>
+
+namespace depthbias::gap {
+namespace {
+
+// Huber's loss as a residual: r̃ = r for |r| ≤ k, sign(r)·√(2k|r| − k²) beyond, so that
+// r̃² = 2ρ(r); dr̃/dr = 1 inside, k/|r̃| beyond.
+inline double Robust(double r, double k, double* d) {
+  if (k <= 0 || std::fabs(r) <= k) {
+    *d = 1;
+    return r;
+  }
+  const double rt = std::copysign(std::sqrt(2 * k * std::fabs(r) - k * k), r);
+  *d = k / std::fabs(rt);
+  return rt;
+}
+
+// Where the continuous coordinates of a fit live: one block per (term, used group), one per
+// fitted scenario's calibration.
+struct Layout {
+  struct Block {
+    int term = -1, group = -1, scenario = -1;
+    std::vector<int> axes;  // continuous axes of the term (term blocks)
+  };
+  std::vector<Block> blocks;
+  std::vector<std::vector<int>> term_block;  // [term][group] → block, −1 if the group is unused
+  std::vector<int> scenario_block;           // [scenario] → block, −1 if no cell is fitted
+};
+
+class GapCost : public ceres::CostFunction {
+ public:
+  GapCost(const GapModel& model, const std::vector<Term>& terms, const Layout& layout,
+          std::vector<size_t> obs, std::vector<std::vector<std::vector<double>>> fixed)
+      : model_(model), terms_(terms), layout_(layout), obs_(std::move(obs)),
+        fixed_(std::move(fixed)) {
+    for (const auto& b : layout_.blocks)
+      mutable_parameter_block_sizes()->push_back(b.term >= 0 ? static_cast<int>(b.axes.size())
+                                                             : 2);
+    int priors = 0;
+    for (int b : layout_.scenario_block) priors += b >= 0 ? 2 : 0;
+    set_num_residuals(static_cast<int>(obs_.size()) + priors);
+  }
+
+  // Coordinates of every axis of term t's group g at the current parameters.
+  void TermCoords(double const* const* p, int t, int g, double* u) const {
+    const std::vector<double>& fixed = fixed_[t][g];
+    for (size_t a = 0; a < fixed.size(); ++a) u[a] = fixed[a];
+    const int b = layout_.term_block[t][g];
+    if (b < 0) return;
+    const auto& axes = layout_.blocks[b].axes;
+    for (size_t j = 0; j < axes.size(); ++j) u[axes[j]] = p[b][j];
+  }
+
+  bool Evaluate(double const* const* p, double* residuals, double** jac) const override {
+    const int k_count = model_.num_metrics();
+    const double huber = model_.settings().huber_k;
+    const Simulations& s = model_.sims();
+    if (jac) {
+      for (size_t b = 0; b < layout_.blocks.size(); ++b)
+        if (jac[b])
+          std::fill(jac[b], jac[b] + num_residuals() * parameter_block_sizes()[b], 0.0);
+    }
+    double u[2], v[2];
+    for (size_t i = 0; i < obs_.size(); ++i) {
+      const size_t o = obs_[i];
+      const int cell = static_cast<int>(o / k_count);
+      const int scen = model_.design().scenario[cell];
+      double mu = s.base[o];
+      for (size_t t = 0; t < terms_.size(); ++t) {
+        TermCoords(p, static_cast<int>(t), model_.Group(terms_[t], cell), u);
+        mu += model_.Delta(terms_[t], u, o);
+      }
+      const int nb = layout_.scenario_block[scen];
+      if (nb >= 0) mu += s.jac_log_sigma[o] * p[nb][0] + s.jac_logit_p[o] * p[nb][1];
+      const double w = model_.weight(o);
+      double d = 1;
+      residuals[i] = Robust((model_.y(o) - mu) * w, huber, &d);
+      if (!jac) continue;
+      const double g = -d * w;  // ∂r̃/∂μ
+      for (size_t t = 0; t < terms_.size(); ++t) {
+        const int grp = model_.Group(terms_[t], cell);
+        const int b = layout_.term_block[t][grp];
+        if (b < 0 || !jac[b]) continue;
+        const auto& axes = layout_.blocks[b].axes;
+        TermCoords(p, static_cast<int>(t), grp, u);
+        for (size_t j = 0; j < axes.size(); ++j) {
+          const std::vector<double>& nodes = model_.NodeCoords(terms_[t].candidate, axes[j]);
+          const double h = 1e-3 * (nodes.back() - nodes.front());
+          std::copy(u, u + 2, v);
+          v[axes[j]] = u[axes[j]] + h;
+          const double up = model_.Delta(terms_[t], v, o);
+          v[axes[j]] = u[axes[j]] - h;
+          const double down = model_.Delta(terms_[t], v, o);
+          jac[b][i * axes.size() + j] = g * (up - down) / (2 * h);
+        }
+      }
+      if (nb >= 0 && jac[nb]) {
+        jac[nb][i * 2] = g * s.jac_log_sigma[o];
+        jac[nb][i * 2 + 1] = g * s.jac_logit_p[o];
+      }
+    }
+    size_t row = obs_.size();
+    const double tau[2] = {model_.settings().tau_log_sigma, model_.settings().tau_logit_p};
+    for (size_t sc = 0; sc < layout_.scenario_block.size(); ++sc) {
+      const int nb = layout_.scenario_block[sc];
+      if (nb < 0) continue;
+      for (int j = 0; j < 2; ++j, ++row) {
+        residuals[row] = p[nb][j] / tau[j];
+        if (jac && jac[nb]) jac[nb][row * 2 + j] = 1.0 / tau[j];
+      }
+    }
+    return true;
+  }
+
+ private:
+  const GapModel& model_;
+  const std::vector<Term>& terms_;
+  const Layout& layout_;
+  std::vector<size_t> obs_;
+  std::vector<std::vector<std::vector<double>>> fixed_;  // [term][group][axis] coordinates
+};
+
+// The node of a (possibly 2-D) grid as axis indices.
+std::vector<int> NodeAxes(const Surface& s, int node) {
+  if (s.candidate.axes.size() == 1) return {node};
+  const int n1 = static_cast<int>(s.candidate.axes[1].nodes.size());
+  return {node / n1, node % n1};
+}
+
+// Per scenario, the calibration moves that minimize Σ (r − a·n)² + Σ (n/τ)² given residuals r
+// and the Jacobian columns a (plain squares), and the value reached.
+struct ScenarioProfile {
+  std::vector<std::array<double, 5>> normal;  // per scenario: Σa_σ², Σa_σa_p, Σa_p², Σa_σ r, Σa_p r
+  std::vector<double> rr;                     // per scenario: Σ r²
+};
+
+double ProfiledValue(const ScenarioProfile& p, int s, const FitSettings& fs, int frozen) {
+  const auto& n = p.normal[s];
+  Eigen::Matrix2d a;
+  const double held = 1e12;  // a frozen component: its move costs everything
+  a << n[0] + (frozen & 1 ? held : 1 / (fs.tau_log_sigma * fs.tau_log_sigma)), n[1], n[1],
+      n[2] + (frozen & 2 ? held : 1 / (fs.tau_logit_p * fs.tau_logit_p));
+  const Eigen::Vector2d b(n[3], n[4]);
+  const Eigen::Vector2d x = a.ldlt().solve(b);
+  return p.rr[s] - b.dot(x);  // min of rᵀr − 2bᵀx + xᵀAx
+}
+
+}  // namespace
+
+bool FitSettings::IsValid(std::string* why) const {
+  if (!(tau_log_sigma > 0) || !(tau_logit_p > 0) || !std::isfinite(huber_k) ||
+      max_iterations < 1) {
+    if (why) *why = "fit settings: prior widths must be > 0, huber_k finite, iterations >= 1";
+    return false;
+  }
+  return true;
+}
+
+GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEstimate& noise,
+                   const FitSettings& settings)
+    : design_(design), sims_(sims), settings_(settings) {
+  const int k_count = design.num_metrics();
+  const size_t n = design.real.size();
+  y_ = design.real;
+  sigma_.assign(n, NAN);
+  valid_.assign(n, 0);
+  phi_.assign(k_count, 1.0);
+  for (int c = 0; c < design.num_cells(); ++c)
+    for (int k = 0; k < k_count; ++k) {
+      const size_t o = static_cast<size_t>(c) * k_count + k;
+      sigma_[o] = noise.Of(design, sims, c, k);
+      valid_[o] = std::isfinite(y_[o]) && std::isfinite(sims.base[o]) && sigma_[o] > 0;
+    }
+  for (const Surface& s : sims.surfaces) {
+    std::vector<std::vector<double>> axes;
+    for (const Axis& a : s.candidate.axes) {
+      std::vector<double> c;
+      for (double v : a.nodes) c.push_back(a.log_scale ? std::log(v) : v);
+      axes.push_back(c);
+    }
+    coords_.push_back(axes);
+  }
+  absorbs_.assign(sims.surfaces.size(), 0);
+}
+
+int GapModel::Frozen(const std::vector<Term>& terms) const {
+  int mask = 0;
+  for (const Term& t : terms) mask |= absorbs_[t.candidate];
+  return mask;
+}
+
+double GapModel::weight(size_t obs) const {
+  return 1.0 / (sigma_[obs] * std::sqrt(phi_[obs % design_.num_metrics()]));
+}
+
+int GapModel::NumGroups(const Term& t) const {
+  return t.per_scenario ? design_.num_scenarios() : 1;
+}
+
+int GapModel::Group(const Term& t, int cell) const {
+  return t.per_scenario ? design_.scenario[cell] : 0;
+}
+
+double GapModel::ToCoord(int candidate, int axis, double value) const {
+  return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::log(value) : value;
+}
+
+double GapModel::FromCoord(int candidate, int axis, double coord) const {
+  return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::exp(coord) : coord;
+}
+
+double GapModel::Delta(const Term& term, const double* u, size_t obs) const {
+  const Surface& s = sims_.surfaces[term.candidate];
+  const auto& axes = coords_[term.candidate];
+  const double* row = &s.table[obs * s.num_nodes];
+  double value;
+  if (axes.size() == 1) {
+    value = Pchip(axes[0].data(), row, static_cast<int>(axes[0].size()), u[0]);
+  } else {
+    const int n0 = static_cast<int>(axes[0].size()), n1 = static_cast<int>(axes[1].size());
+    const int group = Group(term, static_cast<int>(obs / design_.num_metrics()));
+    const int d0 = term.Discrete(group, 0), d1 = term.Discrete(group, 1);
+    if (d0 >= 0) {
+      value = Pchip(axes[1].data(), row + d0 * n1, n1, u[1]);
+    } else {
+      double along[64];
+      for (int i = 0; i < n0; ++i)
+        along[i] = d1 >= 0 ? row[i * n1 + d1] : Pchip(axes[1].data(), row + i * n1, n1, u[1]);
+      value = Pchip(axes[0].data(), along, n0, u[0]);
+    }
+  }
+  return value - sims_.base[obs];
+}
+
+std::vector<double> GapModel::Predict(const ModelFit& fit) const {
+  const int k_count = num_metrics();
+  std::vector<double> mu(sims_.base);
+  double u[2];
+  for (size_t o = 0; o < mu.size(); ++o) {
+    const int cell = static_cast<int>(o / k_count);
+    for (const TermFit& t : fit.terms) {
+      const auto& values = t.values[Group(t.term, cell)];
+      for (size_t a = 0; a < values.size(); ++a)
+        u[a] = ToCoord(t.term.candidate, static_cast<int>(a), values[a]);
+      mu[o] += Delta(t.term, u, o);
+    }
+    if (!fit.nuisance.empty()) {
+      const auto& n = fit.nuisance[design_.scenario[cell]];
+      mu[o] += sims_.jac_log_sigma[o] * n[0] + sims_.jac_logit_p[o] * n[1];
+    }
+  }
+  return mu;
+}
+
+double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells) const {
+  const int k_count = num_metrics();
+  double sum = 0;
+  for (size_t o = 0; o < mu.size(); ++o) {
+    if (!valid(o) || !cells[o / k_count] || !std::isfinite(mu[o])) continue;
+    double d;
+    const double r = Robust((y_[o] - mu[o]) * weight(o), settings_.huber_k, &d);
+    sum += r * r;
+  }
+  return sum;
+}
+
+ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
+                  const std::vector<char>& train, const ModelFit* start) {
+  ModelFit fit;
+  const Design& d = model.design();
+  const int k_count = model.num_metrics();
+  const int scenarios = d.num_scenarios();
+  const int frozen = model.Frozen(terms);
+
+  // Which groups and scenarios have fitted cells.
+  std::vector<size_t> obs;
+  std::vector<char> scenario_used(scenarios, 0);
+  std::vector<std::vector<char>> group_used(terms.size());
+  for (size_t t = 0; t < terms.size(); ++t) group_used[t].assign(model.NumGroups(terms[t]), 0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    if (!train[c]) continue;
+    bool any = false;
+    for (int k = 0; k < k_count; ++k) {
+      const size_t o = static_cast<size_t>(c) * k_count + k;
+      if (!model.valid(o)) continue;
+      obs.push_back(o);
+      any = true;
+    }
+    if (!any) continue;
+    scenario_used[d.scenario[c]] = 1;
+    for (size_t t = 0; t < terms.size(); ++t) group_used[t][model.Group(terms[t], c)] = 1;
+  }
+  if (obs.empty()) {
+    fit.message = "no observation to fit";
+    return fit;
+  }
+
+  // Start: the given fit's values, else each term's best grid node (per group).
+  std::vector<std::vector<std::vector<double>>> coords(terms.size());  // [term][group][axis]
+  for (size_t t = 0; t < terms.size(); ++t) {
+    const Candidate& cand = model.surface(terms[t].candidate).candidate;
+    const int groups = model.NumGroups(terms[t]);
+    const TermFit* from = nullptr;
+    if (start)
+      for (const TermFit& tf : start->terms)
+        if (tf.term.candidate == terms[t].candidate &&
+            tf.term.per_scenario == terms[t].per_scenario)
+          from = &tf;
+    coords[t].assign(groups, std::vector<double>(cand.axes.size(), 0.0));
+    for (int g = 0; g < groups; ++g)
+      for (size_t a = 0; a < cand.axes.size(); ++a) {
+        const int disc = terms[t].Discrete(g, static_cast<int>(a));
+        double value = disc >= 0 ? cand.axes[a].nodes[disc]
+                       : from    ? from->values[g][a]
+                       : std::isfinite(cand.axes[a].neutral) ? cand.axes[a].neutral
+                                                              : cand.axes[a].reference;
+        coords[t][g][a] = model.ToCoord(terms[t].candidate, static_cast<int>(a), value);
+      }
+  }
+
+  Layout layout;
+  layout.term_block.resize(terms.size());
+  std::vector<std::vector<double>> blocks;
+  for (size_t t = 0; t < terms.size(); ++t) {
+    const Candidate& cand = model.surface(terms[t].candidate).candidate;
+    std::vector<int> axes;
+    for (size_t a = 0; a < cand.axes.size(); ++a) {
+      if (!cand.axes[a].discrete) axes.push_back(static_cast<int>(a));
+    }
+    layout.term_block[t].assign(model.NumGroups(terms[t]), -1);
+    for (int g = 0; g < model.NumGroups(terms[t]); ++g) {
+      if (!group_used[t][g] || axes.empty()) continue;
+      layout.term_block[t][g] = static_cast<int>(layout.blocks.size());
+      layout.blocks.push_back({static_cast<int>(t), g, -1, axes});
+      std::vector<double> x;
+      for (int a : axes) x.push_back(coords[t][g][a]);
+      blocks.push_back(x);
+    }
+  }
+  layout.scenario_block.assign(scenarios, -1);
+  for (int s = 0; s < scenarios; ++s) {
+    if (!scenario_used[s]) continue;
+    layout.scenario_block[s] = static_cast<int>(layout.blocks.size());
+    layout.blocks.push_back({-1, -1, s, {}});
+    std::array<double, 2> n{0, 0};
+    if (start && static_cast<int>(start->nuisance.size()) == scenarios) n = start->nuisance[s];
+    for (int j = 0; j < 2; ++j)
+      if (frozen & (1 << j)) n[j] = 0;
+    blocks.push_back({n[0], n[1]});
+  }
+
+  auto* cost = new GapCost(model, terms, layout, obs, coords);
+  ceres::Problem::Options po;
+  ceres::Problem problem(po);
+  std::vector<double*> ptrs;
+  for (auto& b : blocks) ptrs.push_back(b.data());
+  problem.AddResidualBlock(cost, nullptr, ptrs);
+  for (size_t b = 0; b < layout.blocks.size(); ++b) {
+    const Layout::Block& blk = layout.blocks[b];
+    if (blk.term < 0) {  // a calibration block: its frozen components held
+      if (frozen == 3) {
+        problem.SetParameterBlockConstant(ptrs[b]);
+      } else if (frozen) {
+        problem.SetManifold(ptrs[b], new ceres::SubsetManifold(2, {frozen == 1 ? 0 : 1}));
+      }
+      continue;
+    }
+    for (size_t j = 0; j < blk.axes.size(); ++j) {
+      const auto& nodes = model.NodeCoords(terms[blk.term].candidate, blk.axes[j]);
+      problem.SetParameterLowerBound(ptrs[b], static_cast<int>(j), nodes.front());
+      problem.SetParameterUpperBound(ptrs[b], static_cast<int>(j), nodes.back());
+    }
+  }
+  ceres::Solver::Options options;
+  options.max_num_iterations = model.settings().max_iterations;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  options.function_tolerance = 1e-10;
+  options.parameter_tolerance = 1e-10;
+  options.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  fit.report = summary.BriefReport();
+  if (!summary.IsSolutionUsable()) {
+    fit.message = "the solver found no usable solution: " + summary.message;
+    return fit;
+  }
+
+  // Covariance of every coordinate from the Jacobian at the solution (prior rows included).
+  const int rows = cost->num_residuals();
+  std::vector<int> offset;
+  int total = 0;
+  for (const auto& b : blocks) {
+    offset.push_back(total);
+    total += static_cast<int>(b.size());
+  }
+  Eigen::MatrixXd var = Eigen::MatrixXd::Constant(total, total, NAN);
+  std::vector<double> residuals(rows);
+  {
+    std::vector<std::vector<double>> jb(blocks.size());
+    std::vector<double*> jp;
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      jb[b].assign(static_cast<size_t>(rows) * blocks[b].size(), 0.0);
+      jp.push_back(jb[b].data());
+    }
+    cost->Evaluate(ptrs.data(), residuals.data(), jp.data());
+    Eigen::MatrixXd j(rows, total);
+    for (size_t b = 0; b < blocks.size(); ++b)
+      for (int r = 0; r < rows; ++r)
+        for (size_t c = 0; c < blocks[b].size(); ++c)
+          j(r, offset[b] + c) = jb[b][r * blocks[b].size() + c];
+    // Frozen calibration components are no parameters: their columns leave.
+    std::vector<int> free;
+    for (size_t b = 0; b < blocks.size(); ++b)
+      for (size_t c = 0; c < blocks[b].size(); ++c)
+        if ((layout.blocks[b].term >= 0 || !(frozen & (1 << c))) &&
+            j.col(offset[b] + static_cast<int>(c)).squaredNorm() > 1e-20)  // no influence: NaN
+          free.push_back(offset[b] + static_cast<int>(c));
+    Eigen::MatrixXd jf(rows, static_cast<int>(free.size()));
+    for (size_t c = 0; c < free.size(); ++c) jf.col(c) = j.col(free[c]);
+    const Eigen::MatrixXd info = jf.transpose() * jf;
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(info);
+    cod.setThreshold(1e-10);
+    if (cod.rank() == static_cast<int>(free.size())) {
+      const Eigen::MatrixXd inv = cod.pseudoInverse();
+      for (size_t a = 0; a < free.size(); ++a)
+        for (size_t b = 0; b < free.size(); ++b) var(free[a], free[b]) = inv(a, b);
+    }
+  }
+  fit.data_deviance = 0;
+  for (size_t i = 0; i < obs.size(); ++i) fit.data_deviance += residuals[i] * residuals[i];
+  fit.prior = 0;
+  for (int r = static_cast<int>(obs.size()); r < rows; ++r) fit.prior += residuals[r] * residuals[r];
+  fit.num_obs = static_cast<int>(obs.size());
+
+  // Back to natural units; unused groups take the mean of the used ones' coordinates.
+  for (size_t t = 0; t < terms.size(); ++t) {
+    const int cand_index = terms[t].candidate;
+    const Candidate& cand = model.surface(cand_index).candidate;
+    const int groups = model.NumGroups(terms[t]);
+    TermFit tf;
+    tf.term = terms[t];
+    tf.group_used = group_used[t];
+    std::vector<std::vector<double>> u = coords[t], sd(groups, std::vector<double>(cand.axes.size(), NAN));
+    for (int g = 0; g < groups; ++g) {
+      const int b = layout.term_block[t][g];
+      if (b < 0) continue;
+      for (size_t j = 0; j < layout.blocks[b].axes.size(); ++j) {
+        const int a = layout.blocks[b].axes[j];
+        u[g][a] = blocks[b][j];
+        sd[g][a] = std::sqrt(var(offset[b] + j, offset[b] + j));
+      }
+    }
+    int used = 0;
+    for (int g = 0; g < groups; ++g) used += group_used[t][g];
+    for (int g = 0; g < groups; ++g) {
+      if (group_used[t][g] || used == 0) continue;
+      for (size_t a = 0; a < cand.axes.size(); ++a) {
+        double sum = 0;
+        for (int h = 0; h < groups; ++h) sum += group_used[t][h] ? u[h][a] : 0.0;
+        u[g][a] = sum / used;
+      }
+    }
+    tf.values.assign(groups, {});
+    tf.ci_lo.assign(groups, {});
+    tf.ci_hi.assign(groups, {});
+    tf.at_bound.assign(groups, {});
+    for (int g = 0; g < groups; ++g) {
+      for (size_t a = 0; a < cand.axes.size(); ++a) {
+        const auto& nodes = model.NodeCoords(cand_index, static_cast<int>(a));
+        const double x = u[g][a], s = sd[g][a];
+        tf.values[g].push_back(model.FromCoord(cand_index, static_cast<int>(a), x));
+        const bool disc = cand.axes[a].discrete;
+        tf.ci_lo[g].push_back(disc ? tf.values[g].back()
+                                   : model.FromCoord(cand_index, static_cast<int>(a), x - 1.96 * s));
+        tf.ci_hi[g].push_back(disc ? tf.values[g].back()
+                                   : model.FromCoord(cand_index, static_cast<int>(a), x + 1.96 * s));
+        const double tol = 1e-6 * (nodes.back() - nodes.front());
+        tf.at_bound[g].push_back(!disc && group_used[t][g] &&
+                                 (x <= nodes.front() + tol || x >= nodes.back() - tol));
+      }
+      if (group_used[t][g]) fit.num_params += static_cast<int>(cand.axes.size());
+    }
+    fit.terms.push_back(std::move(tf));
+  }
+  fit.nuisance.assign(scenarios, {0.0, 0.0});
+  fit.nuisance_sd.assign(scenarios, {NAN, NAN});
+  for (int s = 0; s < scenarios; ++s) {
+    const int b = layout.scenario_block[s];
+    if (b < 0) continue;
+    fit.nuisance[s] = {blocks[b][0], blocks[b][1]};
+    fit.nuisance_sd[s] = {std::sqrt(var(offset[b], offset[b])),
+                          std::sqrt(var(offset[b] + 1, offset[b] + 1))};
+  }
+  fit.success = true;
+  return fit;
+}
+
+ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
+                      const std::vector<char>& train, const ModelFit* shared) {
+  const Design& d = model.design();
+  const Surface& surf = model.surface(candidate);
+  const Candidate& cand = surf.candidate;
+  const Simulations& sims = model.sims();
+  const int k_count = model.num_metrics();
+  const int scenarios = d.num_scenarios();
+  const FitSettings& fs = model.settings();
+  const int frozen = model.Absorbs(candidate);
+
+  // Profiled value of every node, per scenario (plain squares, calibration in closed form).
+  std::vector<std::vector<double>> value(surf.num_nodes, std::vector<double>(scenarios, 0.0));
+  for (int node = 0; node < surf.num_nodes; ++node) {
+    ScenarioProfile p;
+    p.normal.assign(scenarios, {0, 0, 0, 0, 0});
+    p.rr.assign(scenarios, 0.0);
+    for (int c = 0; c < d.num_cells(); ++c) {
+      if (!train[c]) continue;
+      const int s = d.scenario[c];
+      for (int k = 0; k < k_count; ++k) {
+        const size_t o = static_cast<size_t>(c) * k_count + k;
+        if (!model.valid(o)) continue;
+        const double w = model.weight(o);
+        const double r = (model.y(o) - surf.table[o * surf.num_nodes + node]) * w;
+        const double as = sims.jac_log_sigma[o] * w, ap = sims.jac_logit_p[o] * w;
+        auto& n = p.normal[s];
+        n[0] += as * as;
+        n[1] += as * ap;
+        n[2] += ap * ap;
+        n[3] += as * r;
+        n[4] += ap * r;
+        p.rr[s] += r * r;
+      }
+    }
+    for (int s = 0; s < scenarios; ++s) value[node][s] = ProfiledValue(p, s, fs, frozen);
+  }
+
+  // Starting points. Shared: every local minimum of the profile over the grid (neighbours along
+  // the continuous axes; an effect whose spreads are even in its sign has one on either side;
+  // the absent effect once), the three lowest. Per scenario: each group's best node (discrete
+  // axes included), and the shared fit's values.
+  std::vector<int> discrete_axes;
+  for (size_t a = 0; a < cand.axes.size(); ++a)
+    if (cand.axes[a].discrete) discrete_axes.push_back(static_cast<int>(a));
+  const int groups = per_scenario ? scenarios : 1;
+  struct Option {
+    std::vector<std::vector<int>> discrete_node;  // [group][axis]
+    double value = 0;
+    std::vector<std::vector<double>> values;  // [group][axis]
+  };
+  auto node_values = [&](int node) {
+    const std::vector<int> ax = NodeAxes(surf, node);
+    std::vector<double> v;
+    for (size_t a = 0; a < cand.axes.size(); ++a) v.push_back(cand.axes[a].nodes[ax[a]]);
+    return v;
+  };
+  auto discrete_of = [&](int node) {
+    std::vector<int> d(cand.axes.size(), -1);
+    const std::vector<int> ax = NodeAxes(surf, node);
+    for (int a : discrete_axes) d[a] = ax[a];
+    return d;
+  };
+  std::vector<Option> options;
+  if (!per_scenario) {
+    std::vector<double> total(surf.num_nodes, 0.0);
+    for (int node = 0; node < surf.num_nodes; ++node)
+      for (int sc = 0; sc < scenarios; ++sc) total[node] += value[node][sc];
+    const int n1 = cand.axes.size() > 1 ? static_cast<int>(cand.axes[1].nodes.size()) : 1;
+    for (int node = 0; node < surf.num_nodes; ++node) {
+      const std::vector<int> ax = NodeAxes(surf, node);
+      bool local = !IsNeutral(cand, node_values(node)) || node == 0 || discrete_axes.empty();
+      for (size_t a = 0; a < cand.axes.size() && local; ++a) {
+        if (cand.axes[a].discrete) continue;
+        const int stride = a == 0 ? n1 : 1;
+        if (ax[a] > 0 && total[node - stride] < total[node]) local = false;
+        if (ax[a] + 1 < static_cast<int>(cand.axes[a].nodes.size()) &&
+            total[node + stride] < total[node])
+          local = false;
+      }
+      if (local) options.push_back({{discrete_of(node)}, total[node], {node_values(node)}});
+    }
+    std::sort(options.begin(), options.end(),
+              [](const Option& a, const Option& b) { return a.value < b.value; });
+    if (options.size() > 3) options.resize(3);
+  } else {
+    Option opt;
+    for (int g = 0; g < groups; ++g) {
+      int best_node = 0;
+      for (int node = 1; node < surf.num_nodes; ++node)
+        if (value[node][g] < value[best_node][g]) best_node = node;
+      opt.value += value[best_node][g];
+      opt.discrete_node.push_back(discrete_of(best_node));
+      opt.values.push_back(node_values(best_node));
+    }
+    options.push_back(opt);
+    if (shared && shared->success && !shared->terms.empty()) {
+      const TermFit& t = shared->terms[0];
+      options.push_back({std::vector<std::vector<int>>(groups, t.term.discrete_node[0]), 0,
+                         std::vector<std::vector<double>>(groups, t.values[0])});
+    }
+  }
+
+  ModelFit best;
+  for (const Option& opt : options) {
+    Term term{candidate, per_scenario, opt.discrete_node};
+    ModelFit start;
+    TermFit tf;
+    tf.term = term;
+    tf.values = opt.values;
+    start.terms.push_back(tf);
+    ModelFit f = FitTerms(model, {term}, train, &start);
+    if (f.success && (!best.success || f.Deviance() < best.Deviance())) best = std::move(f);
+  }
+  if (!best.success && best.message.empty()) best.message = "no fit of " + cand.effect;
+  return best;
+}
+
+HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
+                      const std::vector<int>& fold, int num_folds, const ModelFit& full) {
+  HeldOut out;
+  const Design& d = model.design();
+  const int k_count = model.num_metrics();
+  out.mu.assign(model.num_obs(), NAN);
+  out.cells.assign(d.num_cells(), 0);
+  for (int f = 0; f < num_folds; ++f) {
+    std::vector<char> train(d.num_cells(), 0), held(d.num_cells(), 0);
+    bool any = false;
+    for (int c = 0; c < d.num_cells(); ++c) {
+      train[c] = fold[c] != f;
+      held[c] = fold[c] == f;
+      any = any || held[c];
+    }
+    if (!any) continue;
+    ModelFit fit;
+    if (terms.empty()) {
+      fit = FitTerms(model, {}, train);
+    } else if (terms.size() == 1) {
+      const ModelFit shared = terms[0].per_scenario
+                                  ? FitCandidate(model, terms[0].candidate, false, train)
+                                  : ModelFit();
+      fit = FitCandidate(model, terms[0].candidate, terms[0].per_scenario, train, &shared);
+    } else {
+      fit = FitTerms(model, terms, train, &full);
+    }
+    if (!fit.success) {
+      out.success = false;
+      out.message = "fold " + std::to_string(f + 1) + ": " + fit.message;
+      return out;
+    }
+    const std::vector<double> mu = model.Predict(fit);
+    for (int c = 0; c < d.num_cells(); ++c) {
+      if (!held[c]) continue;
+      out.cells[c] = 1;
+      for (int k = 0; k < k_count; ++k) {
+        const size_t o = static_cast<size_t>(c) * k_count + k;
+        out.mu[o] = mu[o];
+      }
+    }
+  }
+  out.data_deviance = model.DataDeviance(out.mu, out.cells);
+  return out;
+}
+
+}  // namespace depthbias::gap

@@ -1,0 +1,154 @@
+#pragma once
+// The fits of the diagnosis: effects (each at values interpolated between its simulated grid
+// nodes) added to the base simulation, jointly with the calibration's nuisance parameters,
+// solved with Ceres.
+//
+// For an observation (cell c, compared metric k) with real value y and base simulation b:
+//   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)                   (1)
+//   r = (y − μ) / (σ · √φ_k)                                                         (2)
+// Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
+// the term's group of the cell (one shared group, or the cell's scenario); n_s the scenario's
+// calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J simulated at the base;
+// σ the noise (noise.h) and φ_k the metric's dispersion (how much wider than the replicates'
+// noise its residuals are, ≥ 1). Effects of several terms add (in the metrics' own scales).
+// Ceres minimizes the deviance
+//   D = Σ 2ρ(r) + Σ_s (n_σ,s/τ_σ)² + (n_p,s/τ_p)²                                     (3)
+// with ρ Huber's loss at k (plain squares for k ≤ 0): the calibration may move, at a cost set by
+// its prior widths τ, but no further than the data ask.
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "gap/design.h"
+#include "gap/noise.h"
+#include "gap/simulations.h"
+
+namespace depthbias::gap {
+
+struct FitSettings {
+  double huber_k = 3.0;         // robust loss threshold [noise units]; <= 0: plain squares
+  double tau_log_sigma = 0.15;  // prior width of each scenario's Δ log σ_d
+  double tau_logit_p = 0.3;     // prior width of each scenario's Δ logit p
+  int max_iterations = 50;
+
+  bool IsValid(std::string* why) const;
+};
+
+// One effect in a model: a candidate (index into the simulations' surfaces), its parameters
+// shared by every cell or one set per scenario, and the node of each discrete axis.
+struct Term {
+  int candidate = 0;
+  bool per_scenario = false;
+  // [group][axis]: the node index of a discrete axis, −1 for a continuous one; one row serves
+  // every group.
+  std::vector<std::vector<int>> discrete_node;
+
+  int Discrete(int group, int axis) const {
+    if (discrete_node.empty()) return -1;
+    const auto& row = discrete_node[discrete_node.size() == 1 ? 0 : group];
+    return axis < static_cast<int>(row.size()) ? row[axis] : -1;
+  }
+};
+
+struct TermFit {
+  Term term;
+  std::vector<std::vector<double>> values;  // [group][axis], natural units
+  std::vector<std::vector<double>> ci_lo;   // 95 % interval [group][axis] (discrete: the value)
+  std::vector<std::vector<double>> ci_hi;
+  std::vector<std::vector<char>> at_bound;  // the value sits on the grid's edge
+  std::vector<char> group_used;             // the group had cells in the fit (else: mean)
+};
+
+struct ModelFit {
+  bool success = false;
+  std::string message;
+  std::vector<TermFit> terms;
+  std::vector<std::array<double, 2>> nuisance;     // per scenario: Δ log σ_d, Δ logit p
+  std::vector<std::array<double, 2>> nuisance_sd;  // their standard errors
+  double data_deviance = 0;  // Σ 2ρ(r) over the fitted observations
+  double prior = 0;          // Σ (n/τ)²
+  int num_obs = 0;           // observations fitted
+  int num_params = 0;        // effect parameters (the BIC's k)
+  std::string report;        // Ceres' brief report
+
+  double Deviance() const { return data_deviance + prior; }
+};
+
+class GapModel {
+ public:
+  // The design, simulations and noise must outlive the model.
+  GapModel(const Design& design, const Simulations& sims, const NoiseEstimate& noise,
+           const FitSettings& settings);
+
+  const Design& design() const { return design_; }
+  const Simulations& sims() const { return sims_; }
+  const FitSettings& settings() const { return settings_; }
+  int num_obs() const { return static_cast<int>(y_.size()); }
+  int num_metrics() const { return design_.num_metrics(); }
+  bool valid(size_t obs) const { return valid_[obs] != 0; }
+  double y(size_t obs) const { return y_[obs]; }
+  double noise(size_t obs) const { return sigma_[obs]; }
+  double weight(size_t obs) const;  // 1 / (σ·√φ_k)
+  const std::vector<double>& dispersion() const { return phi_; }
+  void SetDispersion(const std::vector<double>& phi) { phi_ = phi; }
+  const Surface& surface(int candidate) const { return sims_.surfaces[candidate]; }
+
+  // The calibration components a candidate duplicates (bit 0: σ_d, bit 1: hole probability):
+  // its signature lies along them (disparity_noise_gain is a σ_d change, invalidation_gain one
+  // of the hole odds). A model holding such a term keeps those components at the configured
+  // values: moving both would leave a free second-order difference that fits noise.
+  void SetAbsorbs(int candidate, int mask) { absorbs_[candidate] = mask; }
+  int Absorbs(int candidate) const { return absorbs_[candidate]; }
+  int Frozen(const std::vector<Term>& terms) const;
+
+  int NumGroups(const Term& term) const;
+  int Group(const Term& term, int cell) const;
+  // Coordinates of an axis value (its log for a log-scale axis) and back.
+  double ToCoord(int candidate, int axis, double value) const;
+  double FromCoord(int candidate, int axis, double coord) const;
+  const std::vector<double>& NodeCoords(int candidate, int axis) const {
+    return coords_[candidate][axis];
+  }
+  // The term's departure from the base at coordinates u (one per axis) for one observation.
+  double Delta(const Term& term, const double* u, size_t obs) const;
+  // Prediction μ (1) of every observation under a fit (every cell, fitted or not).
+  std::vector<double> Predict(const ModelFit& fit) const;
+  // Σ 2ρ(r) over the valid observations of the cells marked in `cells`.
+  double DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells) const;
+
+ private:
+  const Design& design_;
+  const Simulations& sims_;
+  FitSettings settings_;
+  std::vector<double> y_, sigma_, phi_;
+  std::vector<char> valid_;
+  std::vector<std::vector<std::vector<double>>> coords_;  // [candidate][axis][node]
+  std::vector<int> absorbs_;                               // [candidate]
+};
+
+// Fits the terms (with their discrete nodes fixed) and the calibration on the marked cells,
+// starting from `start` (a fit of the same terms; else each term from its best grid node).
+ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
+                  const std::vector<char>& train, const ModelFit* start = nullptr);
+
+// One candidate alone: every grid node is tried (the calibration solved in closed form, plain
+// squares), and FitTerms refines from the best starts: the lowest local minima of that profile
+// (shared), or each scenario's best node and the shared fit's values when given (per scenario).
+ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
+                      const std::vector<char>& train, const ModelFit* shared = nullptr);
+
+// Held-out predictions: each fold's cells predicted by the terms refitted on the other cells
+// (single candidates by FitCandidate, so their discrete nodes are chosen without the fold;
+// combinations by FitTerms from `full`). Cells never held out get NaN.
+struct HeldOut {
+  std::vector<double> mu;      // [obs]
+  std::vector<char> cells;     // held out at least once
+  double data_deviance = 0;    // Σ 2ρ(r) over the held-out observations
+  bool success = true;
+  std::string message;
+};
+HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
+                      const std::vector<int>& fold, int num_folds, const ModelFit& full);
+
+}  // namespace depthbias::gap

@@ -1,0 +1,71 @@
+#include "gap/noise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace depthbias::gap {
+namespace {
+
+double MedianAbs(std::vector<double> v) {
+  for (double& x : v) x = std::fabs(x);
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  double m = v[mid];
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + mid));
+  return m;
+}
+
+}  // namespace
+
+double NoiseEstimate::Of(const Design& d, const Simulations& s, int cell, int k) const {
+  const double z = s.depth_m[cell];
+  const double a = scale[k] * NoiseShape(d.metrics[k], z);
+  const double q = QuantizationRms(d.metrics[k], z, s.sensor.focal_px(), s.sensor.baseline_m,
+                                   s.sensor.subpixel_step_px,
+                                   s.base[static_cast<size_t>(cell) * d.num_metrics() + k]);
+  return std::sqrt(a * a + q * q);
+}
+
+NoiseEstimate EstimateNoise(const Design& d, const Simulations& s) {
+  const int kk = d.num_metrics();
+  NoiseEstimate n;
+  n.scale.assign(kk, NAN);
+  n.pairs.assign(kk, 0);
+  n.method.assign(kk, "");
+  for (int k = 0; k < kk; ++k) {
+    const int m = d.metrics[k];
+    auto obs = [&](int c) { return static_cast<size_t>(c) * kk + k; };
+    std::vector<double> diffs;
+    for (const auto& p : d.pairs) {
+      const double e_on = d.real[obs(p[0])] - s.base[obs(p[0])];
+      const double e_off = d.real[obs(p[1])] - s.base[obs(p[1])];
+      if (!std::isfinite(e_on) || !std::isfinite(e_off)) continue;
+      diffs.push_back((e_on - e_off) / NoiseShape(m, s.depth_m[p[0]]));
+    }
+    double scale = 0;
+    if (static_cast<int>(diffs.size()) >= kMinReplicatePairs) {
+      scale = 1.4826 * MedianAbs(diffs) / std::sqrt(2.0);
+      n.method[k] = "replicates";
+    } else {
+      if (s.replica.empty())
+        throw std::invalid_argument("noise: too few emitter on/off pairs and no simulated replica");
+      diffs.clear();
+      for (int c = 0; c < d.num_cells(); ++c) {
+        const double e = s.replica[obs(c)] - s.base[obs(c)];
+        if (std::isfinite(e)) diffs.push_back(e / NoiseShape(m, s.depth_m[c]));
+      }
+      scale = diffs.empty() ? 0.0 : 1.4826 * MedianAbs(diffs);
+      n.method[k] = "simulated replicates";
+    }
+    n.pairs[k] = static_cast<int>(diffs.size());
+    if (!(scale >= InfoOf(m).noise_floor)) {
+      scale = InfoOf(m).noise_floor;
+      n.method[k] += " + floor";
+    }
+    n.scale[k] = scale;
+  }
+  return n;
+}
+
+}  // namespace depthbias::gap

@@ -1,0 +1,475 @@
+#include "gap/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "gap/json.h"
+
+namespace depthbias::gap {
+namespace {
+
+std::string Num(double v, int digits = 3) {
+  if (!std::isfinite(v)) return "–";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+std::string Pct(double v) {
+  if (!std::isfinite(v)) return "–";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f %%", v);
+  return buf;
+}
+
+const Candidate& CandidateOf(const DiagnoseResult& r, const TermFit& t) {
+  return r.candidates[t.term.candidate];
+}
+
+std::string Scope(const TermFit& t) { return t.term.per_scenario ? "per_scenario" : "shared"; }
+
+void GapJsonStat(JsonWriter& w, const std::string& key, const DiagnoseResult& r,
+                 const GapStat& g) {
+  w.BeginObject(key);
+  w.Number("overall", g.overall).Integer("observations", g.count);
+  w.BeginObject("per_metric");
+  for (size_t k = 0; k < r.metric_names.size() && k < g.mean_sq.size(); ++k)
+    w.Number(r.metric_names[k], g.mean_sq[k]);
+  w.EndObject().EndObject();
+}
+
+// {param: value} or {scenario: {param: value}}; with ci, {param: [lo, hi]}.
+void ParamsJson(JsonWriter& w, const std::string& key, const DiagnoseResult& r, const TermFit& t,
+                bool ci) {
+  const Candidate& c = CandidateOf(r, t);
+  auto one = [&](int g) {
+    for (size_t a = 0; a < c.axes.size(); ++a) {
+      if (!ci) {
+        w.Number(c.axes[a].param, t.values[g][a]);
+      } else {
+        w.BeginArray(c.axes[a].param).Number(t.ci_lo[g][a]).Number(t.ci_hi[g][a]).EndArray();
+      }
+    }
+  };
+  w.BeginObject(key);
+  if (!t.term.per_scenario) {
+    one(0);
+  } else {
+    for (size_t g = 0; g < t.values.size(); ++g) {
+      w.BeginObject(r.design.scenario_names[g]);
+      one(static_cast<int>(g));
+      w.EndObject();
+    }
+  }
+  w.EndObject();
+}
+
+std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci) {
+  const Candidate& c = CandidateOf(r, t);
+  auto one = [&](int g) {
+    std::string s;
+    for (size_t a = 0; a < c.axes.size(); ++a) {
+      s += (s.empty() ? "" : ", ") + c.axes[a].param + " " + Num(t.values[g][a]);
+      if (with_ci && !c.axes[a].discrete && std::isfinite(t.ci_lo[g][a]))
+        s += " [" + Num(t.ci_lo[g][a]) + ", " + Num(t.ci_hi[g][a]) + "]";
+      if (t.at_bound[g][a]) s += " (grid edge)";
+    }
+    return s;
+  };
+  if (!t.term.per_scenario) return one(0);
+  std::string s;
+  for (size_t g = 0; g < t.values.size(); ++g)
+    s += (s.empty() ? "" : "; ") + r.design.scenario_names[g] + ": " + one(static_cast<int>(g));
+  return s;
+}
+
+void CellGapJson(JsonWriter& w, const DiagnoseResult& r, const CellGap& c) {
+  w.BeginObject();
+  w.String("bag", r.design.bag[c.cell]).Number("chi2", c.chi2).Integer("df", c.df);
+  w.Number("p_value", c.p_value).String("worst_metric", r.metric_names[c.worst]);
+  w.Number("worst_z", c.worst_z);
+  w.EndObject();
+}
+
+std::string CellName(const DiagnoseResult& r, int c) {
+  const sim::Cell& cell = r.design.cells[c];
+  return cell.light + " " + cell.preset + " emitter " + (cell.emitter_on ? "on" : "off") + " " +
+         Num(cell.distance_m) + " m " + Num(cell.angle_deg) + "°";
+}
+
+double Shrink(const GapStat& before, const GapStat& after) {
+  return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : NAN;
+}
+
+// Shares of one localization row, largest first, as "distance 18 %, angle×light 21 %, ...".
+std::string TopShares(const std::vector<std::string>& terms, const std::vector<double>& pct,
+                      int count) {
+  std::vector<int> idx(terms.size());
+  for (size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
+  std::sort(idx.begin(), idx.end(), [&](int a, int b) { return pct[a] > pct[b]; });
+  std::string s;
+  for (int i = 0; i < count && i < static_cast<int>(idx.size()); ++i)
+    s += (s.empty() ? "" : ", ") + terms[idx[i]] + " " + Pct(pct[idx[i]]);
+  return s;
+}
+
+}  // namespace
+
+std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const ReportContext& ctx) {
+  JsonWriter w;
+  w.BeginObject();
+  w.String("tool", "diagnose_gap").String("version", ctx.version);
+  w.BeginObject("input");
+  w.String("file", ctx.input).String("sha256", ctx.input_sha256);
+  w.Integer("rows_used", r.design.num_cells());
+  w.BeginArray("rows_skipped");
+  for (const auto& s : r.design.skipped) w.String(s);
+  w.EndArray().EndObject();
+  w.BeginObject("settings");
+  w.String("protocol", ctx.protocol).String("sensor", ctx.sensor);
+  w.Integer("seed", static_cast<long long>(ctx.seed)).Integer("frames", p.simulate.frames);
+  w.String("holdout", r.holdout).Integer("folds", r.folds);
+  w.Number("huber_k", p.fit.huber_k).Number("tau_log_sigma", p.fit.tau_log_sigma);
+  w.Number("tau_logit_p", p.fit.tau_logit_p).Number("confounded_r", p.confounded_r);
+  w.Number("absorb_r", p.absorb_r).Number("alpha", p.alpha);
+  w.Integer("simulations", r.simulations);
+  w.BeginArray("candidates");
+  for (const auto& c : r.candidates) w.String(c.effect);
+  w.EndArray().EndObject();
+
+  w.BeginArray("metrics");
+  for (size_t k = 0; k < r.metric_names.size(); ++k) {
+    const MetricInfo& info = InfoOf(r.design.metrics[k]);
+    w.BeginObject().String("name", info.name).String("unit", info.unit);
+    w.String("meaning", info.meaning).Number("noise_at_10m", r.noise.scale[k]);
+    w.Number("noise_exponent", info.noise_exponent).String("noise_method", r.noise.method[k]);
+    w.Integer("noise_pairs", r.noise.pairs[k]).Number("dispersion", r.dispersion[k]);
+    w.EndObject();
+  }
+  w.EndArray();
+
+  w.BeginObject("baseline_gap");
+  GapJsonStat(w, "in_sample", r, r.baseline);
+  GapJsonStat(w, "heldout_cells", r, r.baseline_heldout);
+  w.EndObject();
+
+  const Localization& loc = r.localization;
+  w.BeginObject("localization");
+  w.BeginObject("share_pct");
+  for (size_t t = 0; t < loc.terms.size(); ++t) w.Number(loc.terms[t], loc.overall_pct[t]);
+  w.EndObject();
+  w.BeginObject("share_pct_per_metric");
+  for (size_t k = 0; k < loc.metric_pct.size(); ++k) {
+    w.BeginObject(r.metric_names[k]);
+    for (size_t t = 0; t < loc.terms.size(); ++t) w.Number(loc.terms[t], loc.metric_pct[k][t]);
+    w.EndObject();
+  }
+  w.EndObject();
+  w.BeginObject("metric_share_pct");
+  for (size_t k = 0; k < loc.metric_share_pct.size(); ++k)
+    w.Number(r.metric_names[k], loc.metric_share_pct[k]);
+  w.EndObject();
+  w.BeginArray("significant_cells");
+  for (const auto& c : loc.significant) CellGapJson(w, r, c);
+  w.EndArray().EndObject();
+
+  w.BeginObject("calibration");
+  w.BeginArray("scenarios");
+  for (size_t s = 0; s < r.calibrated.size(); ++s) {
+    w.BeginObject().String("scenario", r.design.scenario_names[s]);
+    w.BeginObject("sigma_d_px").Number("configured", r.configured[s].sigma_d_px);
+    w.Number("fitted", r.calibrated[s].sigma_d_px).EndObject();
+    w.BeginObject("invalid_prob").Number("configured", r.configured[s].invalid_prob);
+    w.Number("fitted", r.calibrated[s].invalid_prob).EndObject();
+    w.EndObject();
+  }
+  w.EndArray();
+  GapJsonStat(w, "gap_in_sample", r, r.calibration_in);
+  GapJsonStat(w, "gap_heldout", r, r.calibration_heldout);
+  w.EndObject();
+
+  w.BeginArray("effects");
+  for (size_t i = 0; i < r.effects.size(); ++i) {
+    const EffectResult& e = r.effects[i];
+    const sim::EffectInfo* info = sim::FindEffect(e.name);
+    w.BeginObject().String("name", e.name).Integer("rank", static_cast<long long>(i + 1));
+    w.String("scope", Scope(e.fit));
+    ParamsJson(w, "params", r, e.fit, false);
+    ParamsJson(w, "ci95", r, e.fit, true);
+    w.Number("delta_bic", e.delta_bic).Number("delta_bic_shared", e.delta_bic_shared);
+    w.Number("delta_bic_per_scenario", e.delta_bic_per_scenario);
+    w.Number("heldout_gain", e.heldout_gain).Bool("earns", e.earns);
+    w.Number("shrink_in_sample_pct", e.shrink_in_sample_pct);
+    w.Number("shrink_heldout_pct", e.shrink_heldout_pct);
+    GapJsonStat(w, "gap_in_sample", r, e.in_sample);
+    GapJsonStat(w, "gap_heldout", r, e.heldout);
+    if (info) w.String("cause", info->cause).String("signature", info->signature);
+    w.EndObject();
+  }
+  w.EndArray();
+
+  w.BeginArray("selected");
+  for (size_t i = 0; i < r.selected.terms.size(); ++i) {
+    const TermFit& t = r.selected.terms[i];
+    w.BeginObject().String("name", CandidateOf(r, t).effect).String("scope", Scope(t));
+    ParamsJson(w, "params", r, t, false);
+    ParamsJson(w, "ci95", r, t, true);
+    if (i < r.steps.size())
+      w.Number("delta_bic", r.steps[i].delta_bic).Number("heldout_gain", r.steps[i].heldout_gain);
+    w.EndObject();
+  }
+  w.EndArray();
+
+  w.BeginArray("confounded");
+  for (const auto& c : r.confounded) {
+    w.BeginObject().BeginArray("effects").String(c.a).String(c.b).EndArray();
+    w.Number("correlation", c.correlation).EndObject();
+  }
+  w.EndArray();
+  w.BeginArray("signature_correlations");
+  for (const auto& c : r.correlations) {
+    w.BeginObject().BeginArray("effects").String(c.a).String(c.b).EndArray();
+    w.Number("correlation", c.correlation).EndObject();
+  }
+  w.EndArray();
+
+  w.BeginObject("how_far");
+  GapJsonStat(w, "baseline", r, r.baseline);
+  GapJsonStat(w, "calibrated", r, r.calibration_in);
+  GapJsonStat(w, "selected_in_sample", r, r.selected_in);
+  GapJsonStat(w, "selected_heldout", r, r.selected_heldout);
+  if (r.verified) GapJsonStat(w, "selected_simulated", r, r.verified_in);
+  else w.Null("selected_simulated");
+  w.Number("shrink_in_sample_pct", Shrink(r.baseline, r.selected_in));
+  w.Number("shrink_heldout_pct", Shrink(r.baseline_heldout, r.selected_heldout));
+  w.EndObject();
+
+  w.BeginObject("remaining_gap");
+  GapJsonStat(w, "in_sample", r, r.selected_in);
+  GapJsonStat(w, "heldout", r, r.selected_heldout);
+  w.BeginArray("cells");
+  for (const auto& c : r.remaining) CellGapJson(w, r, c);
+  w.EndArray().EndObject();
+
+  const int kk = static_cast<int>(r.metric_names.size());
+  std::vector<char> sig_base(r.design.num_cells(), 0), sig_left(r.design.num_cells(), 0);
+  for (const auto& c : r.localization.significant) sig_base[c.cell] = 1;
+  for (const auto& c : r.remaining) sig_left[c.cell] = 1;
+  w.BeginArray("cells");
+  for (int c = 0; c < r.design.num_cells(); ++c) {
+    const sim::Cell& cell = r.design.cells[c];
+    w.BeginObject().String("bag", r.design.bag[c]).String("light", cell.light);
+    w.String("preset", cell.preset).String("emitter", cell.emitter_on ? "on" : "off");
+    w.Number("distance_m", cell.distance_m).Number("angle_deg", cell.angle_deg);
+    auto row = [&](const std::string& key, const std::vector<double>& v) {
+      w.BeginObject(key);
+      for (int k = 0; k < kk; ++k)
+        w.Number(r.metric_names[k], v.empty() ? NAN : v[static_cast<size_t>(c) * kk + k]);
+      w.EndObject();
+    };
+    row("real", r.design.real);
+    row("sim", r.sim_base);
+    row("z_baseline", r.z_base);
+    row("z_selected", r.z_selected);
+    row("z_heldout", r.z_selected_heldout);
+    w.Bool("significant_baseline", sig_base[c]).Bool("significant_after", sig_left[c]);
+    w.EndObject();
+  }
+  w.EndArray();
+  w.EndObject();
+  return w.Text();
+}
+
+std::string GapSummary(const DiagnoseResult& r) {
+  std::ostringstream o;
+  const Localization& loc = r.localization;
+  int worst = 0;
+  for (size_t k = 1; k < loc.metric_share_pct.size(); ++k)
+    if (loc.metric_share_pct[k] > loc.metric_share_pct[worst]) worst = static_cast<int>(k);
+  o << "where: baseline gap " << Num(r.baseline.overall) << " (mean squared gap in noise units; 1 "
+    << "= repeatability), " << loc.significant.size() << " of " << r.design.num_cells()
+    << " cells significant; carried by " << r.metric_names[worst] << " ("
+    << Pct(loc.metric_share_pct[worst]) << "); by factor: " << TopShares(loc.terms, loc.overall_pct, 3)
+    << "\n";
+  if (!r.effects.empty())
+    o << "which: best alone " << r.effects[0].name << " (" << ParamsText(r, r.effects[0].fit, false)
+      << "; ΔBIC " << Num(r.effects[0].delta_bic) << ", held-out gain "
+      << Num(r.effects[0].heldout_gain) << ")\n";
+  if (r.steps.empty()) {
+    o << "selected: none (no effect earns both its BIC and a held-out gain)\n";
+  } else {
+    o << "selected:";
+    for (size_t i = 0; i < r.selected.terms.size(); ++i)
+      o << (i ? ";" : "") << " " << CandidateOf(r, r.selected.terms[i]).effect << " ("
+        << ParamsText(r, r.selected.terms[i], false) << ")";
+    o << "\n";
+  }
+  o << "how far: gap " << Num(r.baseline.overall) << " -> " << Num(r.selected_in.overall)
+    << " in sample (" << Pct(Shrink(r.baseline, r.selected_in)) << " shrink), "
+    << Num(r.baseline_heldout.overall) << " -> " << Num(r.selected_heldout.overall)
+    << " held out (" << Pct(Shrink(r.baseline_heldout, r.selected_heldout)) << ")";
+  if (r.verified) o << ", simulated " << Num(r.verified_in.overall);
+  o << "\nleft: " << r.remaining.size() << " of " << r.design.num_cells()
+    << " cells still significant\n";
+  for (const auto& c : r.confounded)
+    o << "confounded: " << c.a << " ~ " << c.b << " (r = " << Num(c.correlation) << ")\n";
+  return o.str();
+}
+
+std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
+                        const ReportContext& ctx) {
+  std::ostringstream o;
+  const Localization& loc = r.localization;
+  const int kk = static_cast<int>(r.metric_names.size());
+  o << "# Sim-to-real gap: " << ctx.input << "\n\n"
+    << "`diagnose_gap` " << ctx.version << ": " << r.design.num_cells() << " rows of `"
+    << ctx.input << "` (sha256 " << ctx.input_sha256.substr(0, 16) << "…) against the simulator ("
+    << ctx.protocol << ", sensor " << ctx.sensor << ", seed " << ctx.seed << ", "
+    << p.simulate.frames << " frames a cell, " << r.simulations << " simulations of the table), "
+    << "held out by " << r.holdout << " (" << r.folds << " folds).\n\n";
+  if (!r.design.skipped.empty())
+    o << "Rows left out: " << r.design.skipped.size() << " (" << r.design.skipped.front()
+      << (r.design.skipped.size() > 1 ? ", …" : "") << ").\n\n";
+
+  o << "## In short\n\n```\n" << GapSummary(r) << "```\n\n";
+
+  o << "## 1. The gap\n\n"
+    << "Per recording and metric, z = (real − simulated) / noise. The noise of each metric is "
+    << "measured, not assumed; how is said per metric. The gap is the mean of z² over the "
+    << "table: 1 means the simulator is as close to the camera as the camera is to itself; the "
+    << "dispersion φ is how much wider than that the residuals about the calibrated simulator are "
+    << "(it weighs the metrics against each other in the fits).\n\n"
+    << "| metric | unit | noise at 10 m | noise ∝ (Z/10 m)^ | measured from | φ | baseline gap | "
+       "held-out cells |\n|---|---|---|---|---|---|---|---|\n";
+  for (int k = 0; k < kk; ++k) {
+    const MetricInfo& info = InfoOf(r.design.metrics[k]);
+    o << "| " << info.name << " | " << info.unit << " | " << Num(r.noise.scale[k]) << " | "
+      << Num(info.noise_exponent) << " | " << r.noise.method[k] << " (" << r.noise.pairs[k]
+      << ") | " << Num(r.dispersion[k]) << " | " << Num(r.baseline.mean_sq[k]) << " | "
+      << Num(r.baseline_heldout.mean_sq[k]) << " |\n";
+  }
+  o << "\nReplicates are the emitter on and off rows of one test point: the same panel "
+    << "placement recorded twice, so the difference of their residuals is noise whatever the "
+    << "gap is (robust scale, 1.4826 · median |Δ| / √2). Quantized metrics (median, mean − "
+    << "median, spreads of depths, panel width) also carry their quantization step in quadrature: "
+    << "two recordings of one panel mostly read the same quantized median.\n\n";
+
+  o << "## 2. Where\n\nShare of Σz² by factor (sequential sums of squares on indicator "
+    << "columns: exact for a balanced design; \"rest\" holds higher-order interactions and "
+    << "replicate noise).\n\n| term | all metrics |";
+  for (int k = 0; k < kk; ++k) o << " " << r.metric_names[k] << " |";
+  o << "\n|---|---|";
+  for (int k = 0; k < kk; ++k) o << "---|";
+  o << "\n";
+  for (size_t t = 0; t < loc.terms.size(); ++t) {
+    o << "| " << loc.terms[t] << " | " << Pct(loc.overall_pct[t]) << " |";
+    for (int k = 0; k < kk; ++k) o << " " << Pct(loc.metric_pct[k][t]) << " |";
+    o << "\n";
+  }
+  o << "| share of Σz² | 100 % |";
+  for (int k = 0; k < kk; ++k) o << " " << Pct(loc.metric_share_pct[k]) << " |";
+  o << "\n\n" << loc.significant.size() << " of " << r.design.num_cells()
+    << " recordings depart significantly (χ² over their metrics, p < " << Num(p.alpha)
+    << " / " << r.design.num_cells() << "). The largest:\n\n"
+    << "| recording | χ² | worst metric | its z |\n|---|---|---|---|\n";
+  for (size_t i = 0; i < loc.significant.size() && i < 12; ++i) {
+    const CellGap& c = loc.significant[i];
+    o << "| " << CellName(r, c.cell) << " | " << Num(c.chi2) << " | "
+      << r.metric_names[c.worst] << " | " << Num(c.worst_z) << " |\n";
+  }
+
+  o << "\n## 3. Which effect\n\n"
+    << "The reference is the calibrated base: the configured sensor with each scenario's σ_d "
+    << "and hole probability free to move within their prior widths (log σ_d ± "
+    << Num(p.fit.tau_log_sigma) << ", logit p ± " << Num(p.fit.tau_logit_p) << "):\n\n"
+    << "| scenario | σ_d configured → fitted [px] | hole probability configured → fitted |\n"
+    << "|---|---|---|\n";
+  for (size_t s = 0; s < r.calibrated.size(); ++s)
+    o << "| " << r.design.scenario_names[s] << " | " << Num(r.configured[s].sigma_d_px, 4)
+      << " → " << Num(r.calibrated[s].sigma_d_px, 4) << " | "
+      << Num(r.configured[s].invalid_prob) << " → " << Num(r.calibrated[s].invalid_prob)
+      << " |\n";
+  o << "\nEvery candidate alone with it, parameters shared or per scenario (the better by BIC), "
+    << "ranked by held-out gain (the reference's held-out deviance minus the effect's; "
+    << "ΔBIC = D(reference) − D(effect) − k·ln n). An effect earns its place with both above 0. "
+    << "Shrink: of the baseline gap, in sample and on held-out cells.\n\n"
+    << "| rank | effect | scope | parameters [95 % interval] | ΔBIC | held-out gain | shrink in "
+       "sample | shrink held out | earns |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (size_t i = 0; i < r.effects.size(); ++i) {
+    const EffectResult& e = r.effects[i];
+    o << "| " << i + 1 << " | " << e.name << " | " << (e.per_scenario ? "per scenario" : "shared")
+      << " | " << ParamsText(r, e.fit, true) << " | " << Num(e.delta_bic) << " | "
+      << Num(e.heldout_gain) << " | " << Pct(e.shrink_in_sample_pct) << " | "
+      << Pct(e.shrink_heldout_pct) << " | " << (e.earns ? "yes" : "no") << " |\n";
+  }
+  o << "\nForward selection (the effect of largest held-out gain among those earning both, "
+    << "refitted jointly with those already in):\n\n";
+  if (r.steps.empty()) o << "- nothing earns its place: no registered effect is named.\n";
+  for (size_t i = 0; i < r.steps.size(); ++i)
+    o << "- " << i + 1 << ". " << r.steps[i].effect << " ("
+      << (r.steps[i].per_scenario ? "per scenario" : "shared") << "): ΔBIC "
+      << Num(r.steps[i].delta_bic) << ", held-out gain " << Num(r.steps[i].heldout_gain) << "\n";
+  if (!r.selected.terms.empty()) {
+    o << "\nSelected, fitted together:\n\n| effect | parameters [95 % interval] |\n|---|---|\n";
+    for (const TermFit& t : r.selected.terms)
+      o << "| " << CandidateOf(r, t).effect << " | " << ParamsText(r, t, true) << " |\n";
+  }
+  o << "\nConfounded (signatures with |r| ≥ " << Num(p.confounded_r)
+    << " on this design, or an effect along one calibration direction with r ≥ "
+    << Num(p.absorb_r) << "): these cannot be told apart here, and none is picked over "
+    << "the other.\n\n";
+  if (r.confounded.empty()) o << "- none\n";
+  for (const auto& c : r.confounded)
+    o << "- " << c.a << " ~ " << c.b << ": r = " << Num(c.correlation) << "\n";
+  std::vector<Confounded> strong;
+  for (const auto& c : r.correlations)
+    if (std::fabs(c.correlation) >= 0.7 && std::fabs(c.correlation) < p.confounded_r)
+      strong.push_back(c);
+  if (!strong.empty()) {
+    o << "\nStrongly correlated but told apart (0.7 ≤ |r| < " << Num(p.confounded_r) << "):";
+    for (const auto& c : strong) o << " " << c.a << " ~ " << c.b << " " << Num(c.correlation) << ";";
+    o << "\n";
+  }
+
+  o << "\n## 4. How far\n\n| gap | all metrics |";
+  for (int k = 0; k < kk; ++k) o << " " << r.metric_names[k] << " |";
+  o << "\n|---|---|";
+  for (int k = 0; k < kk; ++k) o << "---|";
+  o << "\n";
+  auto row = [&](const std::string& name, const GapStat& g) {
+    o << "| " << name << " | " << Num(g.overall) << " |";
+    for (int k = 0; k < kk; ++k) o << " " << Num(g.mean_sq[k]) << " |";
+    o << "\n";
+  };
+  row("baseline (configured sensor)", r.baseline);
+  row("calibrated base", r.calibration_in);
+  row("selected, in sample", r.selected_in);
+  row("baseline, held-out cells", r.baseline_heldout);
+  row("calibrated base, held out", r.calibration_heldout);
+  row("selected, held out", r.selected_heldout);
+  if (r.verified) row("selected, simulated at the fit", r.verified_in);
+  o << "\nShrink of the gap: " << Pct(Shrink(r.baseline, r.selected_in)) << " in sample, "
+    << Pct(Shrink(r.baseline_heldout, r.selected_heldout)) << " on held-out cells"
+    << (r.verified ? "; the selected effects simulated at their fitted values leave " +
+                         Num(r.verified_in.overall) + " (the fits add effects' departures; the "
+                         "simulation composes them)."
+                   : ".")
+    << "\n\n## 5. What is left\n\n";
+  if (r.remaining.empty()) {
+    o << "No recording departs significantly once the selected effects are added.\n";
+  } else {
+    o << r.remaining.size() << " of " << r.design.num_cells()
+      << " recordings still depart significantly. The largest:\n\n"
+      << "| recording | χ² | worst metric | its z |\n|---|---|---|---|\n";
+    for (size_t i = 0; i < r.remaining.size() && i < 15; ++i) {
+      const CellGap& c = r.remaining[i];
+      o << "| " << CellName(r, c.cell) << " | " << Num(c.chi2) << " | "
+        << r.metric_names[c.worst] << " | " << Num(c.worst_z) << " |\n";
+    }
+  }
+  return o.str();
+}
+
+}  // namespace depthbias::gap

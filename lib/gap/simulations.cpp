@@ -1,0 +1,210 @@
+#include "gap/simulations.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace depthbias::gap {
+namespace {
+
+double Logit(double p) {
+  p = std::clamp(p, 1e-4, 1 - 1e-4);
+  return std::log(p / (1 - p));
+}
+double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+// The sensor with each listed scenario's log σ_d and logit p moved by the given steps.
+sim::SensorParams Nudged(const sim::SensorParams& s, double d_log_sigma, double d_logit_p) {
+  sim::SensorParams out = s;
+  for (auto& sc : out.scenarios) {
+    sc.sigma_d_px = sc.sigma_d_px * std::exp(d_log_sigma);
+    sc.invalid_prob = Logistic(Logit(sc.invalid_prob) + d_logit_p);
+  }
+  return out;
+}
+
+// Fills every non-finite entry of one observation's node values with the nearest node's (in
+// index steps over the grid) finite value; all non-finite stays so.
+void FillGaps(const std::vector<int>& shape, double* v) {
+  const int n = static_cast<int>(shape.size() == 1 ? shape[0] : shape[0] * shape[1]);
+  const int n1 = shape.size() == 1 ? 1 : shape[1];
+  bool any_gap = false;
+  for (int i = 0; i < n; ++i) any_gap = any_gap || !std::isfinite(v[i]);
+  if (!any_gap) return;
+  std::vector<double> out(v, v + n);
+  for (int i = 0; i < n; ++i) {
+    if (std::isfinite(v[i])) continue;
+    int best = -1, best_d = 1 << 30;
+    for (int j = 0; j < n; ++j) {
+      if (!std::isfinite(v[j])) continue;
+      const int d = std::abs(i / n1 - j / n1) + std::abs(i % n1 - j % n1);
+      if (d < best_d) best_d = d, best = j;
+    }
+    if (best >= 0) out[i] = v[best];
+  }
+  std::copy(out.begin(), out.end(), v);
+}
+
+}  // namespace
+
+bool SimulateOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (frames < 1 || frames > 100000) return fail("frames must be in [1, 100000]");
+  if (threads < 1 || threads > 256) return fail("threads must be in [1, 256]");
+  if (!(region_margin_px >= 0)) return fail("region_margin_px must be >= 0");
+  if (!(step_log_sigma > 0 && step_log_sigma < 1) || !(step_logit_p > 0 && step_logit_p < 3))
+    return fail("nuisance steps must be in (0, 1) (log σ_d) and (0, 3) (logit p)");
+  return true;
+}
+
+bool Simulations::Matches(const Design& design) const {
+  if (metrics != design.metrics || cell_names.size() != design.cells.size()) return false;
+  for (size_t c = 0; c < cell_names.size(); ++c)
+    if (cell_names[c] != design.cells[c].name) return false;
+  return true;
+}
+
+sim::SensorParams ListScenarios(const sim::SensorParams& sensor, const Design& design) {
+  sim::SensorParams out = sensor;
+  out.scenarios.clear();
+  for (const std::string& name : design.scenario_names) {
+    const size_t slash = name.find('/');
+    out.scenarios.push_back(sensor.Scenario(name.substr(0, slash), name.substr(slash + 1)));
+  }
+  return out;
+}
+
+std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& d,
+                                   const SimulateOptions& options, std::vector<double>* depth_m) {
+  const int k_count = d.num_metrics();
+  std::vector<double> out(static_cast<size_t>(d.num_cells()) * k_count, NAN);
+  if (depth_m) depth_m->assign(d.cells.size(), NAN);
+  sim::MetricsParams mp;
+  mp.frames = options.frames;
+  mp.threads = options.threads;
+  mp.region_margin_px = options.region_margin_px;
+  const int groups = params.size() == 1 ? 1 : d.num_scenarios();
+  if (params.empty() || (params.size() != 1 && static_cast<int>(params.size()) != groups))
+    throw std::invalid_argument("SimulateValues: one parameter set, or one per scenario");
+  for (int g = 0; g < groups; ++g) {
+    std::vector<sim::Cell> cells;
+    std::vector<int> index;
+    for (int c = 0; c < d.num_cells(); ++c) {
+      if (groups > 1 && d.scenario[c] != g) continue;
+      cells.push_back(d.cells[c]);
+      index.push_back(c);
+    }
+    if (cells.empty()) continue;
+    const std::vector<sim::CellMetricsResult> r = sim::SimulateCellsMetrics(params[g], cells, mp);
+    for (size_t i = 0; i < cells.size(); ++i) {
+      const int c = index[i];
+      if (depth_m) (*depth_m)[c] = r[i].truth.panel_depth_m;
+      if (!r[i].metrics.ok()) continue;
+      for (int k = 0; k < k_count; ++k)
+        out[static_cast<size_t>(c) * k_count + k] = MetricValue(r[i].metrics, d.metrics[k]);
+    }
+  }
+  return out;
+}
+
+Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
+                           const std::vector<Candidate>& candidates,
+                           const SimulateOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("simulation options: " + why);
+  for (const Candidate& c : candidates)
+    if (!c.IsValid(&why)) throw std::invalid_argument(why);
+  Simulations s;
+  for (const sim::Cell& c : d.cells) s.cell_names.push_back(c.name);
+  s.metrics = d.metrics;
+  sim::SimParams base = base_in;
+  base.sensor = ListScenarios(base_in.sensor, d);
+  s.sensor = base.sensor;
+  auto run = [&](const sim::SimParams& p, std::vector<double>* depth = nullptr) {
+    ++s.runs;
+    return SimulateValues({p}, d, options, depth);
+  };
+  s.base = run(base, &s.depth_m);
+  const size_t obs = s.base.size();
+
+  // The calibration's Jacobian: every scenario nudged at once (each cell sees only its own).
+  auto jacobian = [&](double d_sigma, double d_p, double step) {
+    sim::SimParams plus = base, minus = base;
+    plus.sensor = Nudged(base.sensor, d_sigma, d_p);
+    minus.sensor = Nudged(base.sensor, -d_sigma, -d_p);
+    const std::vector<double> a = run(plus), b = run(minus);
+    std::vector<double> j(obs, 0.0);
+    for (size_t i = 0; i < obs; ++i)
+      if (std::isfinite(a[i]) && std::isfinite(b[i])) j[i] = (a[i] - b[i]) / (2 * step);
+    return j;
+  };
+  s.jac_log_sigma = jacobian(options.step_log_sigma, 0, options.step_log_sigma);
+  s.jac_logit_p = jacobian(0, options.step_logit_p, options.step_logit_p);
+  if (options.replica) {
+    sim::SimParams other = base;
+    other.seed = base.seed + 1;
+    s.replica = run(other);
+  }
+
+  for (const Candidate& cand : candidates) {
+    Surface surf;
+    surf.candidate = cand;
+    std::vector<int> shape;
+    for (const Axis& a : cand.axes) shape.push_back(static_cast<int>(a.nodes.size()));
+    surf.num_nodes = shape.size() == 1 ? shape[0] : shape[0] * shape[1];
+    surf.table.assign(obs * surf.num_nodes, NAN);
+    for (int node = 0; node < surf.num_nodes; ++node) {
+      std::vector<double> values(shape.size());
+      if (shape.size() == 1) {
+        values[0] = cand.axes[0].nodes[node];
+      } else {
+        values[0] = cand.axes[0].nodes[node / shape[1]];
+        values[1] = cand.axes[1].nodes[node % shape[1]];
+      }
+      std::vector<double> v;
+      if (IsNeutral(cand, values)) {
+        v = s.base;
+      } else {
+        sim::SimParams p = base;
+        if (!sim::BuildDepartures({SpecAt(cand, values)}, &p.departures, &why))
+          throw std::invalid_argument("candidate " + cand.effect + ": " + why);
+        v = run(p);
+      }
+      for (size_t i = 0; i < obs; ++i) surf.table[i * surf.num_nodes + node] = v[i];
+    }
+    for (size_t i = 0; i < obs; ++i) FillGaps(shape, &surf.table[i * surf.num_nodes]);
+    s.surfaces.push_back(std::move(surf));
+  }
+  return s;
+}
+
+double Pchip(const double* x, const double* y, int n, double t) {
+  if (n == 1) return y[0];
+  if (t <= x[0]) return y[0];
+  if (t >= x[n - 1]) return y[n - 1];
+  int i = static_cast<int>(std::upper_bound(x, x + n, t) - x) - 1;
+  i = std::clamp(i, 0, n - 2);
+  auto secant = [&](int j) { return (y[j + 1] - y[j]) / (x[j + 1] - x[j]); };
+  // Fritsch–Carlson slopes: the weighted harmonic mean of the neighbouring secants, 0 where
+  // they differ in sign (no overshoot); one-sided at the ends.
+  auto slope = [&](int j) {
+    if (j == 0) return secant(0);
+    if (j == n - 1) return secant(n - 2);
+    const double a = secant(j - 1), b = secant(j);
+    if (a * b <= 0) return 0.0;
+    const double ha = x[j] - x[j - 1], hb = x[j + 1] - x[j];
+    const double w1 = 2 * hb + ha, w2 = hb + 2 * ha;
+    return (w1 + w2) / (w1 / a + w2 / b);
+  };
+  const double h = x[i + 1] - x[i], s = (t - x[i]) / h;
+  const double m0 = slope(i) * h, m1 = slope(i + 1) * h;
+  const double s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * y[i] + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * y[i + 1] +
+         (s3 - s2) * m1;
+}
+
+}  // namespace depthbias::gap

@@ -1,0 +1,71 @@
+#pragma once
+// Everything the diagnosis asks of the simulator, run once: the real table's cells with the base
+// sensor, the base with each scenario's σ_d and hole probability nudged both ways (the
+// calibration's Jacobian, by central differences over common random numbers), and every
+// candidate effect at every node of its grid. The fits then work on these tables alone.
+
+#include <string>
+#include <vector>
+
+#include "gap/candidates.h"
+#include "gap/design.h"
+#include "sim/sim_metrics.h"
+#include "sim/stereo_sim.h"
+
+namespace depthbias::gap {
+
+struct SimulateOptions {
+  int frames = 10;                 // simulated frames per cell
+  int threads = 2;                 // cells simulated in parallel (results do not depend on it)
+  double region_margin_px = 0.5;   // the metrics-only path's region margin
+  double step_log_sigma = 0.1;     // central-difference step on log σ_d
+  double step_logit_p = 0.3;       // central-difference step on logit p
+  bool replica = false;            // also the base at a second seed (simulated replicates)
+
+  bool IsValid(std::string* why) const;
+};
+
+// One candidate's metrics over its grid: table[obs · nodes + node], obs = cell · K + k, nodes in
+// row-major order (axis 0 slowest). A value the simulation could not measure at a node (no valid
+// sample) holds the nearest node's that could.
+struct Surface {
+  Candidate candidate;
+  int num_nodes = 0;
+  std::vector<double> table;
+};
+
+struct Simulations {
+  std::vector<std::string> cell_names;  // the design's cells, to check a design against
+  std::vector<int> metrics;
+  sim::SensorParams sensor;             // the base sensor, every scenario of the table listed
+  std::vector<double> base;             // [obs]
+  std::vector<double> depth_m;          // true panel depth per cell
+  std::vector<double> jac_log_sigma;    // ∂ metric / ∂ log σ_d of the cell's scenario [obs]
+  std::vector<double> jac_logit_p;      // ∂ metric / ∂ logit p of the cell's scenario [obs]
+  std::vector<double> replica;          // [obs] the base at seed + 1 (empty unless asked)
+  std::vector<Surface> surfaces;        // one per candidate, in the candidates' order
+  int runs = 0;                         // simulations of the whole table
+
+  bool Matches(const Design& design) const;
+};
+
+// The base sensor with every scenario of the design listed (the fallback's values for those
+// the sensor does not list), so that its σ_d and p can be moved one scenario at a time.
+sim::SensorParams ListScenarios(const sim::SensorParams& sensor, const Design& design);
+
+// Throws std::invalid_argument for invalid parameters or candidates.
+Simulations SimulateDesign(const sim::SimParams& base, const Design& design,
+                           const std::vector<Candidate>& candidates,
+                           const SimulateOptions& options);
+
+// The design's metrics [obs] with params[s] for the cells of scenario s (one SimParams for all
+// when params has one element); depth_m gets each cell's true panel depth when given.
+std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& design,
+                                   const SimulateOptions& options,
+                                   std::vector<double>* depth_m = nullptr);
+
+// Monotone piecewise-cubic (Fritsch–Carlson) interpolation through (x[i], y[i]), x ascending,
+// t clamped to [x[0], x[n − 1]].
+double Pchip(const double* x, const double* y, int n, double t);
+
+}  // namespace depthbias::gap

@@ -1,0 +1,248 @@
+// The parts of the gap diagnosis against known truth: interpolation, the table's checks and
+// folds, the noise from replicates, the shares of the gap by factor, the χ² tail, the JSON text,
+// and the region_spill effect's signature in the simulator.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "gap/candidates.h"
+#include "gap/design.h"
+#include "gap/json.h"
+#include "gap/localize.h"
+#include "gap/noise.h"
+#include "gap/simulations.h"
+#include "sim/sim_metrics.h"
+#include "sim/stereo_sim.h"
+
+namespace depthbias::gap {
+namespace {
+
+records::PanelMetrics Row(double d, double a, const std::string& preset, const std::string& emitter,
+                          const std::string& light = "daylight") {
+  records::PanelMetrics r;
+  r.bag = light + "_" + preset + "_" + emitter + "_" + std::to_string(d) + "_" + std::to_string(a);
+  r.light = light;
+  r.preset = preset;
+  r.emitter = emitter;
+  r.distance_m = d;
+  r.angle_deg = a;
+  r.median_m = d;
+  r.mean_m = d + 0.01;
+  r.plane_std_m = 0.05;
+  r.valid_pct = 50;
+  r.hole_rate_pct = 50;
+  return r;
+}
+
+std::vector<records::PanelMetrics> Table() {
+  std::vector<records::PanelMetrics> rows;
+  for (const char* light : {"daylight", "sunset"})
+    for (const char* emitter : {"off", "on"})
+      for (double a : {0.0, 20.0})
+        for (const char* preset : {"HA", "HD"})
+          for (double d : {4.0, 8.0, 12.0}) rows.push_back(Row(d, a, preset, emitter, light));
+  return rows;
+}
+
+TEST(Pchip, PassesThroughNodesAndKeepsMonotoneDataMonotone) {
+  const double x[] = {0, 1, 2, 4, 8};
+  const double y[] = {0, 0.1, 3, 3.2, 10};
+  for (int i = 0; i < 5; ++i) EXPECT_DOUBLE_EQ(Pchip(x, y, 5, x[i]), y[i]);
+  double last = -1;
+  for (double t = 0; t <= 8; t += 0.01) {
+    const double v = Pchip(x, y, 5, t);
+    EXPECT_GE(v, last - 1e-12) << t;  // no overshoot: monotone data stay monotone
+    last = v;
+  }
+  EXPECT_DOUBLE_EQ(Pchip(x, y, 5, -3), 0);  // clamped
+  EXPECT_DOUBLE_EQ(Pchip(x, y, 5, 30), 10);
+  const double lx[] = {0, 1, 2}, ly[] = {1, 3, 5};  // a line stays a line
+  EXPECT_NEAR(Pchip(lx, ly, 3, 1.37), 3.74, 1e-12);
+}
+
+TEST(Design, CellsScenariosPairsAndFolds) {
+  Design d;
+  std::string why;
+  auto rows = Table();
+  rows[5].status = "no_panel";
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  EXPECT_EQ(d.num_cells(), 47);
+  ASSERT_EQ(d.skipped.size(), 1u);
+  EXPECT_NE(d.skipped[0].find("no_panel"), std::string::npos);
+  EXPECT_EQ(d.num_scenarios(), 4);
+  EXPECT_EQ(d.num_metrics(), 4);  // the extra metrics are empty in every row
+  EXPECT_EQ(d.pairs.size(), 23u);  // 24 test points, one lost its emitter-off row
+  for (const auto& p : d.pairs) {
+    EXPECT_TRUE(d.cells[p[0]].emitter_on);
+    EXPECT_FALSE(d.cells[p[1]].emitter_on);
+    EXPECT_EQ(d.cells[p[0]].distance_m, d.cells[p[1]].distance_m);
+  }
+  std::vector<int> fold;
+  int folds = 0;
+  ASSERT_TRUE(Folds(d, Holdout{}, &fold, &folds, &why)) << why;
+  EXPECT_EQ(folds, 3);
+  for (int c = 0; c < d.num_cells(); ++c)
+    EXPECT_EQ(fold[c], static_cast<int>(d.cells[c].distance_m / 4) - 1);
+  Holdout h;
+  ASSERT_TRUE(ParseHoldout("light=sunset", &h, &why));
+  ASSERT_TRUE(Folds(d, h, &fold, &folds, &why));
+  EXPECT_EQ(folds, 1);
+  for (int c = 0; c < d.num_cells(); ++c) EXPECT_EQ(fold[c] == 0, d.cells[c].light == "sunset");
+  ASSERT_TRUE(ParseHoldout("point", &h, &why));
+  ASSERT_TRUE(Folds(d, h, &fold, &folds, &why));
+  EXPECT_EQ(folds, 6);
+  EXPECT_FALSE(ParseHoldout("angle", &h, &why));
+  ASSERT_TRUE(ParseHoldout("preset=XY", &h, &why));
+  EXPECT_FALSE(Folds(d, h, &fold, &folds, &why));
+  EXPECT_NE(why.find("no row"), std::string::npos) << why;
+}
+
+TEST(Design, RefusesBadRowsWithTheRowNamed) {
+  Design d;
+  std::string why;
+  auto rows = Table();
+  rows[3].plane_std_m = NAN;
+  EXPECT_FALSE(BuildDesign(rows, &d, &why));
+  EXPECT_NE(why.find("row 4 (" + rows[3].bag + "): plane_std_m"), std::string::npos) << why;
+  rows = Table();
+  rows[0].emitter = "maybe";
+  EXPECT_FALSE(BuildDesign(rows, &d, &why));
+  EXPECT_NE(why.find("emitter"), std::string::npos) << why;
+  EXPECT_FALSE(BuildDesign({}, &d, &why));
+  EXPECT_NE(why.find("no rows"), std::string::npos) << why;
+}
+
+TEST(Noise, ReplicatesGiveTheNoiseOfOneResidual) {
+  Design d;
+  std::string why;
+  auto rows = Table();
+  // Residual noise of 0.02 m at 10 m on the median, shaped as (Z / 10 m)²: alternate signs over
+  // the pairs give |Δ| = 2·0.02·shape, so the robust scale is 1.4826·0.04/√2 ≈ 0.042.
+  for (auto& r : rows) {
+    const double shape = std::pow(r.distance_m / 10.0, 2);
+    r.median_m = r.distance_m + (r.emitter == "on" ? 0.02 : -0.02) * shape;
+  }
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  Simulations s;
+  s.metrics = d.metrics;
+  s.base.assign(d.real.size(), 0.0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    s.depth_m.push_back(d.cells[c].distance_m);
+    for (int k = 0; k < d.num_metrics(); ++k) {
+      const double v = d.real[c * d.num_metrics() + k];
+      s.base[c * d.num_metrics() + k] = k == 0 ? 0.0 : v;  // sim: no bias, the rest equal
+    }
+  }
+  const NoiseEstimate n = EstimateNoise(d, s);
+  EXPECT_NEAR(n.scale[0], 1.4826 * 0.04 / std::sqrt(2.0), 1e-9);
+  EXPECT_EQ(n.method[0], "replicates");
+  EXPECT_EQ(n.pairs[0], 24);
+  EXPECT_EQ(n.method[2], "replicates + floor");  // identical rows: the floor
+  // The quantization of the median adds in quadrature: one subpixel step at 12 m.
+  const double q = 144.0 * s.sensor.subpixel_step_px / (s.sensor.focal_px() * s.sensor.baseline_m);
+  int far = 0;
+  while (d.cells[far].distance_m != 12) ++far;
+  EXPECT_NEAR(n.Of(d, s, far, 0),
+              std::hypot(n.scale[0] * 1.44, q / std::sqrt(12.0)), 1e-12);
+}
+
+TEST(Localize, AGapAlongOneFactorIsThatFactors) {
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(Table(), &d, &why)) << why;
+  const int k_count = d.num_metrics();
+  std::vector<double> z(d.real.size(), 0.0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    z[c * k_count + 0] = d.cells[c].distance_m == 12 ? 5.0 : -2.5;  // distance only, mean 0
+    z[c * k_count + 1] = d.cells[c].preset == "HD" ? 3.0 : 1.0;     // offset 2, preset ±1
+  }
+  const Localization loc = Localize(d, z, 0.05);
+  auto share = [&](int k, const std::string& term) {
+    for (size_t t = 0; t < loc.terms.size(); ++t)
+      if (loc.terms[t] == term) return loc.metric_pct[k][t];
+    return -1.0;
+  };
+  EXPECT_NEAR(share(0, "distance"), 100, 1e-6);
+  EXPECT_NEAR(share(1, "offset"), 80, 1e-6);  // 2² of 2² + 1²
+  EXPECT_NEAR(share(1, "preset"), 20, 1e-6);
+  EXPECT_NEAR(share(1, "rest"), 0, 1e-6);
+  EXPECT_NEAR(loc.metric_share_pct[2], 0, 1e-9);
+  // χ² on 4 metrics: 6.25 + 1 or 9 elsewhere is not significant at 0.05/48 (χ²₄ > 18.4);
+  // 25 + 1 or 9 at 12 m is.
+  EXPECT_EQ(loc.significant.size(), 16u);
+  for (const CellGap& g : loc.significant) EXPECT_EQ(d.cells[g.cell].distance_m, 12);
+}
+
+TEST(ChiSquare, SurvivalMatchesKnownQuantiles) {
+  EXPECT_NEAR(ChiSquareSurvival(3.841459, 1), 0.05, 1e-6);
+  EXPECT_NEAR(ChiSquareSurvival(9.487729, 4), 0.05, 1e-6);
+  EXPECT_NEAR(ChiSquareSurvival(23.20925, 10), 0.01, 1e-6);
+  EXPECT_NEAR(ChiSquareSurvival(0, 3), 1.0, 1e-12);
+}
+
+TEST(Json, EscapesAndWritesNullForNonFinite) {
+  JsonWriter w;
+  w.BeginObject().String("a\"b", "x\ny").Number("n", NAN).BeginArray("v").Number(1.5).EndArray();
+  w.EndObject();
+  EXPECT_EQ(w.Text(), "{\n  \"a\\\"b\": \"x\\ny\",\n  \"n\": null,\n  \"v\": [\n    1.5\n  ]\n}\n");
+}
+
+TEST(Candidates, EveryRegisteredEffectHasAValidGrid) {
+  const auto all = DefaultCandidates();
+  EXPECT_EQ(all.size(), sim::EffectRegistry().size());
+  std::string why;
+  for (const Candidate& c : all) EXPECT_TRUE(c.IsValid(&why)) << why;
+  std::vector<Candidate> some;
+  ASSERT_TRUE(SelectCandidates("depth_scale,region_spill", &some, &why)) << why;
+  EXPECT_EQ(some.size(), 2u);
+  EXPECT_FALSE(SelectCandidates("depth_scale,lens_flare", &some, &why));
+  EXPECT_NE(why.find("lens_flare"), std::string::npos);
+}
+
+// region_spill: the region reaches w whole pixels past the panel's outline onto a background at
+// r times the panel's depth. Its signature: more pixels, a far tail (mean − median), a wider
+// panel; none at w = 0; and the whole spill inside the rendered window up to its 5 px bound.
+TEST(RegionSpill, SignatureInTheMetrics) {
+  sim::SimParams p;
+  p.sensor.fallback = {"", "", 0.08, 0.2};
+  p.seed = 5;
+  sim::Cell c;
+  c.distance_m = 12;
+  c.angle_deg = 20;
+  c.preset = "HD";
+  c.name = sim::CellName(c);
+  sim::MetricsParams mp;
+  mp.frames = 5;
+  auto with = [&](double w, double r) {
+    sim::SimParams q = p;
+    std::string why;
+    EXPECT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", w}, {"background_rel", r}}}},
+                                     &q.departures, &why))
+        << why;
+    return sim::SimulateMetrics(q, c, mp);
+  };
+  const auto base = sim::SimulateMetrics(p, c, mp);
+  const auto none = with(0, 2);
+  const auto spill = with(4, 1.8);
+  EXPECT_EQ(none.region_px, base.region_px);
+  EXPECT_DOUBLE_EQ(none.metrics.mean_m, base.metrics.mean_m);
+  const double side = std::sqrt(static_cast<double>(base.region_px));
+  EXPECT_NEAR(std::sqrt(static_cast<double>(spill.region_px)), side + 8, 1.5);
+  EXPECT_GT(spill.metrics.mean_m - spill.metrics.median_m,
+            base.metrics.mean_m - base.metrics.median_m + 0.3);
+  EXPECT_GT(spill.metrics.panel_width_m, base.metrics.panel_width_m + 0.2);
+  EXPECT_GT(spill.metrics.plane_std_m, base.metrics.plane_std_m);
+  // The 5 px bound: the metrics-only window holds the whole region (same as a full frame's).
+  sim::SimParams q = p;
+  std::string why;
+  ASSERT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", 5}, {"background_rel", 2}}}},
+                                   &q.departures, &why));
+  const auto windowed = sim::SimulateMetrics(q, c, mp);
+  const sim::StereoSim full(q, c);
+  EXPECT_EQ(static_cast<size_t>(windowed.region_px), full.RegionPixels(0.5).size());
+  // A fractional width is floored to whole pixels.
+  EXPECT_EQ(with(4.7, 1.8).region_px, spill.region_px);
+}
+
+}  // namespace
+}  // namespace depthbias::gap
