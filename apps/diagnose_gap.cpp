@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
     if (cases) {
       params.verify = false;
       const std::string table = gap::FormatCases(
-          gap::RunWithheldCases(base, gap::DefaultWithheldCases(), params, base.seed + 1000));
+          gap::RunWithheldCases(base, gap::DefaultWithheldCases(), params, base.seed + 999));
       std::fputs(table.c_str(), stdout);
       if (!out_dir.empty()) {
         fs::create_directories(out_dir);

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Benchmark of diagnose_gap on the article's 128-row table with every candidate effect and
+# leave-one-distance-out cross-validation (the defaults), printed beside its targets (< 60 s on
+# a 2-core machine, aim 10 s) and beside its peer inside the run: the simulator's metrics-only
+# path on the same 128 cells (one simulation of the table), which the diagnosis calls about a
+# hundred times. Wall time and CPU time (user + system) of the whole process, best of REPEAT;
+# the machine's load is printed (a shared machine gives less than its cores).
+# Usage: scripts/bench_diagnose_gap.sh [BUILD_DIR]   (REPEAT=3 OUT_DIR=/tmp/...)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${1:-${BUILD_DIR:-build}}
+APP="$BUILD_DIR/apps/diagnose_gap"
+SIM="$BUILD_DIR/apps/simulate"
+for b in "$APP" "$SIM"; do
+  [ -x "$b" ] || { echo "bench_diagnose_gap: $b not built (run scripts/build.sh)" >&2; exit 1; }
+done
+REPEAT=${REPEAT:-3}
+OUT_DIR=${OUT_DIR:-$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)}
+trap 'rm -rf "$OUT_DIR"' EXIT
+REAL=config/data/paper_d455_outdoor.csv
+
+timed() {  # prints "wall_s cpu_s"
+  /usr/bin/time -f "%e %U %S" -o "$OUT_DIR/time.txt" "$@" > /dev/null
+  awk '{printf "%s %.2f\n", $1, $2 + $3}' "$OUT_DIR/time.txt"
+}
+best() { sort -g | head -1; }
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
+     "load $(cut -d' ' -f1-3 /proc/loadavg)"
+runs=() sims=()
+for _ in $(seq "$REPEAT"); do
+  runs+=("$(timed "$APP" --real "$REAL" --out "$OUT_DIR/out")")
+  sims+=("$(timed "$SIM" --protocol config/protocol_paper.yaml --metrics-only --frames 10 \
+              --out "$OUT_DIR/m.csv")")
+done
+n_sims=$(grep -o '"simulations": [0-9]*' "$OUT_DIR/out/gap.json" | grep -o '[0-9]*$')
+wall=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f1 | best)
+cpu=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f2 | best)
+swall=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f1 | best)
+scpu=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f2 | best)
+echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
+printf '%-58s %9s %9s %s\n' "case (best of $REPEAT)" "wall [s]" "CPU [s]" "target"
+printf '%-58s %9s %9s %s\n' "diagnose_gap, 128 rows, 10 candidates, LODO ($n_sims sims)" \
+  "$wall" "$cpu" "< 60 s wall on 2 cores (aim 10 s)"
+printf '%-58s %9s %9s %s\n' "peer: simulate --metrics-only, 128 cells x 10 frames" \
+  "$swall" "$scpu" "one of the $n_sims"
+awk -v c="$cpu" 'BEGIN {printf "CPU time over 2 cores (an idle 2-core machine): %.1f s\n", c / 2}'
