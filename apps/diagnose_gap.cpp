@@ -45,8 +45,8 @@ int main(int argc, char** argv) {
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   std::string real_csv, out_dir, protocol_file = "config/protocol_paper.yaml", sensor_file;
   bool cases = false;
+  double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
   gap::DiagnoseParams params;
-  params.simulate.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   sim::SimParams base;
   try {
     for (apps::Args args(argc, argv); args.Next();) {
@@ -63,12 +63,14 @@ int main(int argc, char** argv) {
       else if (a == "--holdout") {
         std::string why;
         if (!gap::ParseHoldout(args.Value(), &params.holdout, &why)) throw BadInput(why);
-      } else if (a == "--seed") base.seed = static_cast<std::uint64_t>(args.Number(true, 0, 9007199254740992.0));
-      else if (a == "--frames") params.simulate.frames = static_cast<int>(args.Number(true, 1, 100000));
-      else if (a == "--threads") params.simulate.threads = static_cast<int>(args.Number(true, 1, 256));
+      } else if (a == "--seed") base.seed = static_cast<std::uint64_t>(args.Number(true, 0, 9e15));
+      else if (a == "--frames") frames = args.Number(true, 1, 1e5);
+      else if (a == "--threads") threads = args.Number(true, 1, 256);
       else if (a == "--cases") cases = true;
       else throw BadInput("unknown argument '" + a + "' (see diagnose_gap --help)");
     }
+    params.simulate.frames = static_cast<int>(frames);
+    params.simulate.threads = static_cast<int>(threads);
     if (!cases && (real_csv.empty() || out_dir.empty()))
       throw BadInput("--real REAL.csv and --out DIR are required (see diagnose_gap --help)");
     std::string why, named_sensor;

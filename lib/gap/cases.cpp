@@ -89,8 +89,10 @@ CaseOutcome Judge(const DiagnoseResult& r, const WithheldCase& truth) {
     for (size_t g = 0; g < e->fit.values.size(); ++g)
       if (e->fit.group_used[g]) v.push_back(e->fit.values[g][a]);
     std::sort(v.begin(), v.end());
-    const double got = v.empty() ? NAN : v.size() % 2 ? v[v.size() / 2]
-                                                     : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    const size_t mid = v.size() / 2;
+    const double got = v.empty()      ? NAN
+                       : v.size() % 2 ? v[mid]
+                                      : 0.5 * (v[mid - 1] + v[mid]);
     o.recovered[name] = got;
     const double want = truth.params.count(name) ? truth.params.at(name)
                                                  : info->params[a].default_value;

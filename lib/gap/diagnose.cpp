@@ -89,7 +89,8 @@ std::vector<double> Dispersion(const GapModel& m, const std::vector<double>& mu)
 int NearestNode(const Axis& a, double value) {
   int best = 0;
   for (size_t i = 1; i < a.nodes.size(); ++i)
-    if (std::fabs(a.nodes[i] - value) < std::fabs(a.nodes[best] - value)) best = static_cast<int>(i);
+    if (std::fabs(a.nodes[i] - value) < std::fabs(a.nodes[best] - value))
+      best = static_cast<int>(i);
   return best;
 }
 
@@ -163,7 +164,8 @@ bool DiagnoseParams::IsValid(std::string* why) const {
   if (!(confounded_r > 0 && confounded_r <= 1) || !(absorb_r > 0 && absorb_r <= 1) ||
       !(alpha > 0 && alpha < 1) ||
       max_selected < 0 || max_selected > 10) {
-    if (why) *why = "need confounded_r and absorb_r in (0, 1], alpha in (0, 1), max_selected in [0, 10]";
+    if (why)
+      *why = "need confounded_r and absorb_r in (0, 1], alpha in (0, 1), max_selected in [0, 10]";
     return false;
   }
   return true;
@@ -275,7 +277,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   r.calibrated = sims.sensor.scenarios;
   for (size_t s = 0; s < r.calibrated.size(); ++s) {
     r.calibrated[s].sigma_d_px *= std::exp(m0.nuisance[s][0]);
-    r.calibrated[s].invalid_prob = Logistic(Logit(r.calibrated[s].invalid_prob) + m0.nuisance[s][1]);
+    r.calibrated[s].invalid_prob =
+        Logistic(Logit(r.calibrated[s].invalid_prob) + m0.nuisance[s][1]);
   }
   const double log_n = std::log(static_cast<double>(m0.num_obs));
 

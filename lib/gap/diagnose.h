@@ -76,7 +76,8 @@ struct EffectResult {
 };
 
 struct Confounded {
-  std::string a, b;  // two effects, or an effect and "calibration:sigma_d" / "calibration:hole_prob"
+  // Two effects, or an effect and "calibration:sigma_d" / "calibration:hole_prob".
+  std::string a, b;
   double correlation = 0;
 };
 

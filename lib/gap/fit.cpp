@@ -439,7 +439,8 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
   fit.data_deviance = 0;
   for (size_t i = 0; i < obs.size(); ++i) fit.data_deviance += residuals[i] * residuals[i];
   fit.prior = 0;
-  for (int r = static_cast<int>(obs.size()); r < rows; ++r) fit.prior += residuals[r] * residuals[r];
+  for (int r = static_cast<int>(obs.size()); r < rows; ++r)
+    fit.prior += residuals[r] * residuals[r];
   fit.num_obs = static_cast<int>(obs.size());
 
   // Back to natural units; unused groups take the mean of the used ones' coordinates.
@@ -450,7 +451,8 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
     TermFit tf;
     tf.term = terms[t];
     tf.group_used = group_used[t];
-    std::vector<std::vector<double>> u = coords[t], sd(groups, std::vector<double>(cand.axes.size(), NAN));
+    std::vector<std::vector<double>> u = coords[t];
+    std::vector<std::vector<double>> sd(groups, std::vector<double>(cand.axes.size(), NAN));
     for (int g = 0; g < groups; ++g) {
       const int b = layout.term_block[t][g];
       if (b < 0) continue;
@@ -480,10 +482,11 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
         const double x = u[g][a], s = sd[g][a];
         tf.values[g].push_back(model.FromCoord(cand_index, static_cast<int>(a), x));
         const bool disc = cand.axes[a].discrete;
+        const int ax = static_cast<int>(a);
         tf.ci_lo[g].push_back(disc ? tf.values[g].back()
-                                   : model.FromCoord(cand_index, static_cast<int>(a), x - 1.96 * s));
+                                   : model.FromCoord(cand_index, ax, x - 1.96 * s));
         tf.ci_hi[g].push_back(disc ? tf.values[g].back()
-                                   : model.FromCoord(cand_index, static_cast<int>(a), x + 1.96 * s));
+                                   : model.FromCoord(cand_index, ax, x + 1.96 * s));
         const double tol = 1e-6 * (nodes.back() - nodes.front());
         tf.at_bound[g].push_back(!disc && group_used[t][g] &&
                                  (x <= nodes.front() + tol || x >= nodes.back() - tol));

@@ -34,7 +34,8 @@ std::vector<int> Levels(const Design& d, int factor) {
 Eigen::MatrixXd Indicators(const std::vector<int>& level, const std::vector<int>& cells) {
   int levels = 0;
   for (int c : cells) levels = std::max(levels, level[c] + 1);
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(static_cast<int>(cells.size()), std::max(0, levels - 1));
+  Eigen::MatrixXd m =
+      Eigen::MatrixXd::Zero(static_cast<int>(cells.size()), std::max(0, levels - 1));
   for (size_t i = 0; i < cells.size(); ++i)
     if (level[cells[i]] > 0) m(static_cast<int>(i), level[cells[i]] - 1) = 1;
   return m;
@@ -99,7 +100,8 @@ std::vector<CellGap> SignificantCells(const Design& d, const std::vector<double>
     g.p_value = ChiSquareSurvival(g.chi2, g.df);
     if (g.df > 0 && g.p_value < alpha / d.num_cells()) out.push_back(g);
   }
-  std::sort(out.begin(), out.end(), [](const CellGap& a, const CellGap& b) { return a.chi2 > b.chi2; });
+  std::sort(out.begin(), out.end(),
+            [](const CellGap& a, const CellGap& b) { return a.chi2 > b.chi2; });
   return out;
 }
 
@@ -166,7 +168,8 @@ Localization Localize(const Design& d, const std::vector<double>& z, double alph
   }
   for (int t = 0; t < n_terms; ++t)
     loc.overall_pct.push_back(total > 0 ? 100 * total_ss[t] / total : 0.0);
-  for (double s : loc.metric_sum_sq) loc.metric_share_pct.push_back(total > 0 ? 100 * s / total : 0);
+  for (double s : loc.metric_sum_sq)
+    loc.metric_share_pct.push_back(total > 0 ? 100 * s / total : 0);
   loc.significant = SignificantCells(d, z, alpha);
   return loc;
 }

@@ -291,7 +291,8 @@ std::string GapSummary(const DiagnoseResult& r) {
   o << "where: baseline gap " << Num(r.baseline.overall) << " (mean squared gap in noise units; 1 "
     << "= repeatability), " << loc.significant.size() << " of " << r.design.num_cells()
     << " cells significant; carried by " << r.metric_names[worst] << " ("
-    << Pct(loc.metric_share_pct[worst]) << "); by factor: " << TopShares(loc.terms, loc.overall_pct, 3)
+    << Pct(loc.metric_share_pct[worst])
+    << "); by factor: " << TopShares(loc.terms, loc.overall_pct, 3)
     << "\n";
   if (!r.effects.empty())
     o << "which: best alone " << r.effects[0].name << " (" << ParamsText(r, r.effects[0].fit, false)
@@ -429,7 +430,8 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
       strong.push_back(c);
   if (!strong.empty()) {
     o << "\nStrongly correlated but told apart (0.7 ≤ |r| < " << Num(p.confounded_r) << "):";
-    for (const auto& c : strong) o << " " << c.a << " ~ " << c.b << " " << Num(c.correlation) << ";";
+    for (const auto& c : strong)
+      o << " " << c.a << " ~ " << c.b << " " << Num(c.correlation) << ";";
     o << "\n";
   }
 

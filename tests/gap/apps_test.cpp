@@ -82,7 +82,8 @@ TEST(DiagnoseGapApp, BadInputStopsWithOneLineNamingTheFile) {
   }
   EXPECT_FALSE(fs::exists(d / "out" / "gap.json"));
   std::string err;
-  EXPECT_EQ(RunCommand(Bin("diagnose_gap") + " --real " + kArticle + " --out " + (d / "o").string() +
+  EXPECT_EQ(RunCommand(Bin("diagnose_gap") + " --real " + kArticle + " --out " +
+                           (d / "o").string() +
                     " --holdout angle",
                 d, &err),
             2);
@@ -113,7 +114,8 @@ TEST(DiagnoseGapApp, WritesGapJsonAndReport) {
     EXPECT_NE(md.find(part), std::string::npos) << part;
   EXPECT_NE(Read(d / "stdout.txt").find("how far:"), std::string::npos);
   // Never writes over an input.
-  EXPECT_EQ(RunCommand(Bin("diagnose_gap") + " --real " + (d / "out" / "gap.json").string() + " --out " +
+  EXPECT_EQ(RunCommand(Bin("diagnose_gap") + " --real " + (d / "out" / "gap.json").string() +
+                           " --out " +
                     (d / "out").string(),
                 d, &err),
             2);

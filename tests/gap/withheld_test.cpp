@@ -106,8 +106,9 @@ TEST(Withheld, TwoEffectsAtOnceAreBothSelected) {
   ASSERT_GE(r.selected.terms.size(), 2u);
   for (const TermFit& t : r.selected.terms) {
     const std::string& name = r.candidates[t.term.candidate].effect;
-    if (name == "disparity_offset" && !t.term.per_scenario)
+    if (name == "disparity_offset" && !t.term.per_scenario) {
       EXPECT_NEAR(t.values[0][0], 0.2, 0.04);
+    }
   }
   EXPECT_GE(100 * (1 - r.selected_heldout.overall / r.baseline_heldout.overall), 70);
 }
