@@ -2,6 +2,7 @@
 // explains it, how far the gap shrinks with it (lib/gap); writes DIR/gap.json and DIR/report.md.
 // --cases: the withheld-effect proof instead (each effect simulated at two sizes, diagnosed with
 // the base model), a Markdown table on stdout (and DIR/cases.md with --out).
+#include <glog/logging.h>
 #include <malloc.h>
 
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include "io/atomic_file.h"
 #include "io/metrics_csv.h"
 #include "io/sha256.h"
+#include "io/temp_files.h"
 #include "sim/config_yaml.h"
 
 namespace {
@@ -23,14 +25,22 @@ using namespace depthbias;
 namespace fs = std::filesystem;
 
 constexpr char kUsage[] =
-    "usage: diagnose_gap --real REAL.csv --out DIR [--protocol config/protocol_paper.yaml]\n"
-    "         [--sensor SENSOR.yaml|builtin] [--candidates all|NAME,...]\n"
-    "         [--holdout distance|point|light=V|preset=V] [--seed S] [--frames N] [--threads N]\n"
-    "       diagnose_gap --cases [--out DIR] [--protocol ...] [--sensor ...] [--seed S]\n"
+    "usage: diagnose_gap --real REAL.csv --out DIR\n"
+    "       diagnose_gap --cases [--out DIR]\n"
     "Holds a real panel-metrics table against the simulator run on the same cells: where the\n"
     "gap lies, which registered effect explains it, how far it shrinks (in sample and held\n"
-    "out). Writes DIR/gap.json and DIR/report.md. --cases proves the method on tables made\n"
-    "with a known effect. --sensor defaults to the protocol's.\n";
+    "out). Writes DIR/gap.json and DIR/report.md, all or none. --cases proves the method on\n"
+    "tables made with a known effect (each effect at two sizes): a table on stdout and in\n"
+    "DIR/cases.md. Options (default):\n"
+    "  --real FILE          the real panel-metrics CSV (required without --cases)\n"
+    "  --out DIR            output folder (required without --cases)\n"
+    "  --protocol FILE      protocol YAML: scene and distance meaning (config/protocol_paper.yaml)\n"
+    "  --sensor FILE        sensor YAML, or builtin (the protocol's sensor file)\n"
+    "  --candidates LIST    all, or registry effects separated by commas (all)\n"
+    "  --holdout H          distance, point, light=V or preset=V (distance)\n"
+    "  --seed S             seed of the simulation (1; --cases: tables at S + 999 + i)\n"
+    "  --frames N           simulated frames per cell, 1 to 100000 (10)\n"
+    "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n";
 
 struct BadInput : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -43,6 +53,8 @@ int main(int argc, char** argv) {
   // reuse instead of mapping fresh zeroed pages each time (about a tenth of the run time).
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs through glog
+  io::InstallSignalCleanup();
   std::string real_csv, out_dir, protocol_file = "config/protocol_paper.yaml", sensor_file;
   bool cases = false;
   double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
@@ -53,7 +65,8 @@ int main(int argc, char** argv) {
       const std::string& a = args.flag();
       if (args.IsHelp()) {
         std::fputs(kUsage, stdout);
-        return 0;
+        std::fputs(apps::kExitHelp, stdout);
+        return apps::kExitOk;
       }
       if (a == "--real") real_csv = args.Value();
       else if (a == "--out") out_dir = args.Value();
@@ -96,15 +109,9 @@ int main(int argc, char** argv) {
         fs::create_directories(out_dir);
         io::WriteFileAtomic(cases_md, table);
       }
-      return 0;
+      return apps::kExitOk;
     }
-    std::vector<records::PanelMetrics> rows;
-    try {
-      rows = io::ReadMetricsCsv(real_csv);
-    } catch (const io::IoError& e) {
-      throw BadInput(e.what());
-    }
-    const gap::DiagnoseResult r = gap::Diagnose(rows, base, params);
+    const gap::DiagnoseResult r = gap::Diagnose(io::ReadMetricsCsv(real_csv), base, params);
     if (!r.success) throw BadInput(real_csv + ": " + r.message);
     gap::ReportContext ctx{io::BaseName(real_csv), io::Sha256File(real_csv), protocol_file,
                            sensor_file.empty() ? "builtin" : sensor_file, base.seed,
@@ -114,18 +121,11 @@ int main(int argc, char** argv) {
                           {md, gap::GapMarkdown(r, params, ctx)}});
     std::fputs(gap::GapSummary(r).c_str(), stdout);
     if (!r.message.empty()) std::cerr << "diagnose_gap: note: " << r.message << "\n";
-  } catch (const BadInput& e) {
+    for (const std::string& skipped : r.design.skipped)
+      std::cerr << "diagnose_gap: " << real_csv << ": " << skipped << " (left out)\n";
+    return r.design.skipped.empty() ? apps::kExitOk : apps::kExitRowsFailed;
+  } catch (const std::exception& e) {  // usage, input or output: nothing written
     std::cerr << "diagnose_gap: " << e.what() << "\n";
-    return 2;
-  } catch (const std::invalid_argument& e) {  // a flag's value (apps/args.h)
-    std::cerr << "diagnose_gap: " << e.what() << "\n";
-    return 2;
-  } catch (const io::IoError& e) {  // a file it cannot read (or write)
-    std::cerr << "diagnose_gap: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "diagnose_gap: " << e.what() << "\n";
-    return 1;
+    return apps::kExitError;
   }
-  return 0;
 }
