@@ -34,7 +34,8 @@ constexpr char kUsage[] =
     "DIR/cases.md. Options (default):\n"
     "  --real FILE          the real panel-metrics CSV (required without --cases)\n"
     "  --out DIR            output folder (required without --cases)\n"
-    "  --protocol FILE      protocol YAML: scene and distance meaning (config/protocol_paper.yaml)\n"
+    "  --protocol FILE      protocol YAML: scene, distance meaning (config/protocol_paper.yaml,\n"
+    "                       from the working folder, share/depthbias or the source tree)\n"
     "  --sensor FILE        sensor YAML, or builtin (the protocol's sensor file)\n"
     "  --candidates LIST    all, or registry effects separated by commas (all)\n"
     "  --holdout H          distance, point, light=V or preset=V (distance)\n"
@@ -46,6 +47,18 @@ struct BadInput : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The default protocol, wherever the tool runs from: the working folder's config/, the installed
+// share/depthbias/config/ beside the tool, or the source tree's config/ it was built from.
+std::string DefaultProtocol() {
+  const std::string name = "protocol_paper.yaml";
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec).parent_path();
+  for (const fs::path& dir : {fs::path("config"), exe / ".." / "share" / "depthbias" / "config",
+                              fs::path(DEPTHBIAS_CONFIG_DIR)})
+    if (fs::exists(dir / name, ec)) return (dir / name).string();
+  return (fs::path("config") / name).string();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -55,7 +68,7 @@ int main(int argc, char** argv) {
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs through glog
   io::InstallSignalCleanup();
-  std::string real_csv, out_dir, protocol_file = "config/protocol_paper.yaml", sensor_file;
+  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;
   bool cases = false;
   double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
   gap::DiagnoseParams params;
