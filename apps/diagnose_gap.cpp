@@ -35,7 +35,7 @@ constexpr char kUsage[] =
     "  --real FILE          the real panel-metrics CSV (required without --cases)\n"
     "  --out DIR            output folder (required without --cases)\n"
     "  --protocol FILE      protocol YAML: scene, distance meaning (config/protocol_paper.yaml,\n"
-    "                       from the working folder, share/depthbias or the source tree)\n"
+    "                       from the working folder, share/depthbias or <source>/build)\n"
     "  --sensor FILE        sensor YAML, or builtin (the protocol's sensor file)\n"
     "  --candidates LIST    all, or registry effects separated by commas (all)\n"
     "  --holdout H          distance, point, light=V or preset=V (distance)\n"
@@ -48,13 +48,13 @@ struct BadInput : std::runtime_error {
 };
 
 // The default protocol, wherever the tool runs from: the working folder's config/, the installed
-// share/depthbias/config/ beside the tool, or the source tree's config/ it was built from.
+// share/depthbias/config/ beside the tool, or the source tree's when built in <source>/build.
 std::string DefaultProtocol() {
   const std::string name = "protocol_paper.yaml";
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec).parent_path();
   for (const fs::path& dir : {fs::path("config"), exe / ".." / "share" / "depthbias" / "config",
-                              fs::path(DEPTHBIAS_CONFIG_DIR)})
+                              exe / ".." / ".." / "config"})
     if (fs::exists(dir / name, ec)) return (dir / name).string();
   return (fs::path("config") / name).string();
 }
