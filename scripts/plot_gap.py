@@ -4,7 +4,7 @@ per scenario and metric), which effect explains it (the ranking with its held-ou
 how far it shrinks (before / after).
 
 Two inputs:
-  --gap DIR/gap.json   the gap report of diagnose_gap (DESIGN.md, "Gap report"): all three
+  --gap DIR/gap.json   the report of diagnose_gap (its schema: README, "gap.json"): all three
                        figures;
   --real R.csv --sim S.csv
                        without a report: real - sim straight from two metrics CSVs (e.g. the
@@ -14,29 +14,16 @@ Two inputs:
 Figures written into --out-dir: gap_heatmaps.png (1500 x 1300 px), and from a report also
 gap_effects.png (1300 x 700 px) and gap_before_after.png (1400 x 650 px).
 
-What is read from gap.json (unknown keys are ignored; a missing part leaves its figure with a
-note, not an error):
-  effects[]        name, params {p: value}, ci95 {p: [lo, hi]} (or one [lo, hi] for a single
-                   parameter), delta_bic, shrink_in_sample_pct, shrink_heldout_pct; best first.
-  selected         a name, a list of names, or of objects with "name".
-  confounded       a list of groups: [a, b], {"effects": [a, b], ...}, {"a": .., "b": ..}, or
-                   "a~b" / "a,b" strings.
-  baseline_gap, remaining_gap
-                   a number, or {label: number}, or {label: {"rms_scaled" | "rms" | "value" |
-                   "gap" | "in_sample" | "heldout": number}}: drawn as bars before / after.
-  per-cell rows    a list under "cells", "per_cell", "cell_rows", "per_cell_rows" or "rows".
-                   A row names its cell with light, preset, [emitter], distance_m (or
-                   distance), angle_deg (or angle); [heldout | held_out | withheld]: true for
-                   cells kept out of the fit. Its values come either
-                   - one metric per row ("long"): "metric" and the gap in the first of
-                     gap_scaled, scaled_gap, z, gap, real_minus_sim, delta (or real - sim),
-                     the gap after the selected effects in the first of gap_after_scaled,
-                     remaining_scaled, gap_after, remaining_gap, remaining, after;
-                   - all metrics in one row ("wide"): nested {"gap": {metric: v}, "gap_after"
-                     (or "remaining"): {metric: v}} (or "real"/"sim" objects), or flat keys
-                     <metric>_gap / gap_<metric> and <metric>_gap_after / <metric>_remaining.
-                   Rows of one cell with several emitter settings are averaged (the heat map
-                   has one value per light x preset x distance x angle).
+What is read from gap.json:
+  metrics[]        name, unit (the rows of the heat maps, in this order);
+  cells[]          light, preset, distance_m, angle_deg, real {metric: v}, sim {metric: v},
+                   z_baseline, z_heldout {metric: z}, significant_after;
+  effects[]        name, scope, params, ci95, delta_bic, earns, shrink_in_sample_pct,
+                   shrink_heldout_pct (best first);
+  selected[]       name; confounded[] effects [a, b], correlation;
+  how_far          baseline, calibrated, selected_in_sample, selected_heldout: overall and
+                   per_metric gap (mean z^2); shrink_in_sample_pct, shrink_heldout_pct.
+A report without one of these parts is refused with one line naming the part.
 
 Usage: plot_gap.py --gap gap.json --out-dir DIR
        plot_gap.py --real real.csv --sim sim.csv --out-dir DIR
@@ -52,12 +39,6 @@ import plot_common as pc
 HEAT_FIGSIZE = (15, 13)
 EFFECTS_FIGSIZE = (13, 7)
 BEFORE_AFTER_FIGSIZE = (14, 6.5)
-CELL_LIST_KEYS = ("cells", "per_cell", "cell_rows", "per_cell_rows", "rows")
-BEFORE_KEYS = ("gap_scaled", "scaled_gap", "z", "gap", "real_minus_sim", "delta")
-AFTER_KEYS = ("gap_after_scaled", "remaining_scaled", "gap_after", "remaining_gap", "remaining",
-              "after")
-HELDOUT_KEYS = ("heldout", "held_out", "withheld")
-SCALAR_KEYS = ("rms_scaled", "rms", "value", "gap", "in_sample", "heldout", "mean_abs")
 # Metrics of the CSV fallback: label, unit, real - sim of one matched pair of rows.
 CSV_METRICS = [
     ("median bias", "m", lambda r, s: r["median_m"] - s["median_m"]),
@@ -66,143 +47,25 @@ CSV_METRICS = [
     ("plane_std", "m", lambda r, s: r["plane_std_m"] - s["plane_std_m"]),
     ("valid_pct", "points", lambda r, s: r["valid_pct"] - s["valid_pct"]),
 ]
+# The stages of the gap in how_far, drawn left to right.
+STAGES = [("baseline", "baseline (configured sensor)", "0.55"),
+          ("calibrated", "calibrated base", "0.75"),
+          ("selected_in_sample", "selected effects, in sample", "tab:cyan"),
+          ("selected_heldout", "selected effects, held-out cells", "tab:blue")]
 
 
-def first_number(obj, keys):
-    for k in keys:
-        v = obj.get(k)
-        if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
-            return float(v)
-    return None
-
-
-def get_any(obj, keys, default=None):
-    for k in keys:
-        if k in obj:
-            return obj[k]
-    return default
+def is_number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 # --- reading a report ---------------------------------------------------------------------------
 
-def cell_of(row, path):
-    light = row.get("light")
-    preset = row.get("preset")
-    dist = get_any(row, ("distance_m", "distance"))
-    ang = get_any(row, ("angle_deg", "angle"))
-    if light is None or preset is None or dist is None or ang is None:
-        raise pc.InputError(f"{path}: a per-cell row lacks light, preset, distance_m or "
-                            f"angle_deg: {json.dumps(row)[:120]}")
-    try:
-        return (str(light), str(preset), float(dist), float(ang))
-    except (TypeError, ValueError):
-        raise pc.InputError(f"{path}: a per-cell row has a non-numeric distance or angle")
-
-
-def per_cell_values(doc, path):
-    """[(cell, metric, before, after or None, heldout bool)] from the report's per-cell rows."""
-    rows = None
-    for key in CELL_LIST_KEYS:
-        if isinstance(doc.get(key), list):
-            rows = doc[key]
-            break
-    if rows is None:
-        return [], False
-    out = []
-    scaled = False
-    for row in rows:
-        if not isinstance(row, dict):
-            raise pc.InputError(f"{path}: per-cell rows must be objects")
-        cell = cell_of(row, path)
-        held = bool(get_any(row, HELDOUT_KEYS, False))
-        if "metric" in row:  # long: one metric per row
-            before = first_number(row, BEFORE_KEYS)
-            if before is None and isinstance(row.get("real"), (int, float)) and \
-                    isinstance(row.get("sim"), (int, float)):
-                before = float(row["real"]) - float(row["sim"])
-            if before is None:
-                continue
-            scaled = scaled or any(k in row for k in ("gap_scaled", "scaled_gap", "z"))
-            out.append((cell, str(row["metric"]), before, first_number(row, AFTER_KEYS), held))
-            continue
-        # wide: nested objects of metrics, or flat <metric>_gap keys
-        nested_before = get_any(row, ("gap_scaled", "gap", "real_minus_sim"))
-        nested_after = get_any(row, ("gap_after_scaled", "gap_after", "remaining", "after"))
-        if isinstance(nested_before, dict):
-            scaled = scaled or isinstance(row.get("gap_scaled"), dict)
-            for metric, v in nested_before.items():
-                if isinstance(v, (int, float)):
-                    after = nested_after.get(metric) if isinstance(nested_after, dict) else None
-                    out.append((cell, metric, float(v),
-                                float(after) if isinstance(after, (int, float)) else None, held))
-        elif isinstance(row.get("real"), dict) and isinstance(row.get("sim"), dict):
-            for metric, v in row["real"].items():
-                s = row["sim"].get(metric)
-                if isinstance(v, (int, float)) and isinstance(s, (int, float)):
-                    out.append((cell, metric, float(v) - float(s), None, held))
-        else:
-            for key, v in row.items():
-                metric = None
-                if key.endswith("_gap") and not key.startswith("gap_"):
-                    metric = key[:-4]
-                elif key.startswith("gap_") and key[4:] not in ("after", "scaled"):
-                    metric = key[4:]
-                if metric is None or not isinstance(v, (int, float)):
-                    continue
-                after = first_number(row, (f"{metric}_gap_after", f"{metric}_remaining",
-                                           f"gap_after_{metric}"))
-                out.append((cell, metric, float(v), after, held))
-    return out, scaled
-
-
-def scalars(value, prefix=""):
-    """{label: number} from a number, {label: number} or {label: {key: number}}."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return {prefix or "all": float(value)}
-    out = {}
-    if isinstance(value, dict):
-        direct = first_number(value, SCALAR_KEYS)
-        if direct is not None and prefix:
-            return {prefix: direct}
-        for k, v in value.items():
-            label = f"{prefix} {k}".strip()
-            if isinstance(v, (int, float)) and not isinstance(v, bool):
-                out[label] = float(v)
-            elif isinstance(v, dict):
-                n = first_number(v, SCALAR_KEYS)
-                if n is not None:
-                    out[label] = n
-    return out
-
-
-def names_of(value):
-    if value is None:
-        return []
-    if isinstance(value, str):
-        return [value]
-    if isinstance(value, dict):
-        return [value["name"]] if "name" in value else []
-    if isinstance(value, list):
-        out = []
-        for v in value:
-            out += names_of(v)
-        return out
-    return []
-
-
-def confounded_groups(value):
-    groups = []
-    for g in value or []:
-        if isinstance(g, list):
-            groups.append([str(x) for x in g if isinstance(x, str)])
-        elif isinstance(g, dict):
-            if isinstance(g.get("effects"), list):
-                groups.append([str(x) for x in g["effects"]])
-            else:
-                groups.append([str(v) for k, v in g.items() if k in ("a", "b", "c")])
-        elif isinstance(g, str):
-            groups.append([x.strip() for x in g.replace("~", ",").split(",") if x.strip()])
-    return [g for g in groups if len(g) >= 2]
+def need(obj, key, kind, path, where):
+    v = obj.get(key) if isinstance(obj, dict) else None
+    if not (is_number(v) if kind is float else isinstance(v, kind)):
+        what = {list: "a list", dict: "an object", str: "a string"}.get(kind, "a number")
+        raise pc.InputError(f"{path}: {where}{key} is missing or not {what}")
+    return v
 
 
 def read_report(path):
@@ -213,26 +76,60 @@ def read_report(path):
             doc = json.load(f)
         except json.JSONDecodeError as e:
             raise pc.InputError(f"{path}: not JSON ({e.msg}, line {e.lineno})")
+        except UnicodeDecodeError:
+            raise pc.InputError(f"{path}: not text")
     if not isinstance(doc, dict):
         raise pc.InputError(f"{path}: not a gap report (a JSON object expected)")
-    if not any(k in doc for k in ("effects", "baseline_gap") + CELL_LIST_KEYS):
-        raise pc.InputError(f"{path}: not a gap report (none of effects, baseline_gap, "
-                            "per-cell rows)")
+    for key in ("metrics", "cells", "effects", "selected", "confounded"):
+        need(doc, key, list, path, "")
+    need(doc, "how_far", dict, path, "")
     return doc
+
+
+def metric_units(doc, path):
+    out = {}
+    for i, m in enumerate(doc["metrics"]):
+        out[need(m, "name", str, path, f"metrics[{i}].")] = str(m.get("unit", ""))
+    if not out:
+        raise pc.InputError(f"{path}: metrics is empty")
+    return out
+
+
+def cell_values(doc, path):
+    """[(cell, metric, real - sim, held-out z or None, significant after)] from cells[]."""
+    units = metric_units(doc, path)
+    out = []
+    for i, row in enumerate(doc["cells"]):
+        where = f"cells[{i}]."
+        cell = (need(row, "light", str, path, where), need(row, "preset", str, path, where),
+                need(row, "distance_m", float, path, where),
+                need(row, "angle_deg", float, path, where))
+        real = need(row, "real", dict, path, where)
+        sim = need(row, "sim", dict, path, where)
+        zh = row.get("z_heldout") if isinstance(row.get("z_heldout"), dict) else {}
+        for metric in units:
+            r, s = real.get(metric), sim.get(metric)
+            if is_number(r) and is_number(s):
+                z = zh.get(metric)
+                out.append((cell, metric, float(r) - float(s), float(z) if is_number(z) else None,
+                            bool(row.get("significant_after", True))))
+    if not out:
+        raise pc.InputError(f"{path}: no cell has both a real and a simulated value")
+    return out, units
 
 
 # --- the CSV fallback ---------------------------------------------------------------------------
 
 def csv_values(real_path, sim_path):
-    need = ["light", "emitter", "preset", "distance_m", "angle_deg", "mean_m", "median_m",
-            "plane_std_m", "valid_pct"]
+    need_cols = ["light", "emitter", "preset", "distance_m", "angle_deg", "mean_m", "median_m",
+                 "plane_std_m", "valid_pct"]
 
     def table(path):
         out = {}
-        for r in pc.ok_rows(pc.read_csv(path, need)):
+        for r in pc.ok_rows(pc.read_csv(path, need_cols)):
             key = (r["light"], r["preset"], r["emitter"], pc.number(r, "distance_m", path),
                    pc.number(r, "angle_deg", path))
-            out[key] = {c: pc.number(r, c, path) for c in need[5:]}
+            out[key] = {c: pc.number(r, c, path) for c in need_cols[5:]}
         return out
 
     real, sim = table(real_path), table(sim_path)
@@ -244,26 +141,25 @@ def csv_values(real_path, sim_path):
     for k in common:
         for label, unit, fn in CSV_METRICS:
             values.append(((k[0], k[1], k[3], k[4]), f"{label} [{unit}]", fn(real[k], sim[k]),
-                           None, False))
+                           None, True))
     return values, len(common), len(real), len(sim)
 
 
 # --- figures ------------------------------------------------------------------------------------
 
 def mean_by_cell(values):
-    """{metric: {cell: (mean before, mean after or None, any held out)}} over emitter rows."""
+    """{metric: {cell: (mean real - sim, explained)}} over the emitter rows of a cell; explained:
+    no row of the cell is significant any more after the selected effects."""
     acc = {}
-    for cell, metric, before, after, held in values:
-        d = acc.setdefault(metric, {}).setdefault(cell, [[], [], False])
-        d[0].append(before)
-        if after is not None:
-            d[1].append(after)
-        d[2] = d[2] or held
-    return {m: {c: (sum(v[0]) / len(v[0]), sum(v[1]) / len(v[1]) if v[1] else None, v[2])
-                for c, v in cells.items()} for m, cells in acc.items()}
+    for cell, metric, gap, _, significant in values:
+        d = acc.setdefault(metric, {}).setdefault(cell, [[], False])
+        d[0].append(gap)
+        d[1] = d[1] or significant
+    return {m: {c: (sum(v[0]) / len(v[0]), not v[1]) for c, v in cells.items()}
+            for m, cells in acc.items()}
 
 
-def heatmaps(values, out, title, unit_note):
+def heatmaps(values, out, title, note, labels=None):
     by_metric = mean_by_cell(values)
     metrics = list(by_metric)[:6]
     scen = sorted({(c[0], c[1]) for m in metrics for c in by_metric[m]},
@@ -274,6 +170,7 @@ def heatmaps(values, out, title, unit_note):
     for i, metric in enumerate(metrics):
         cells = by_metric[metric]
         vmax = max(abs(v[0]) for v in cells.values()) or 1.0
+        label = (labels or {}).get(metric, metric)
         image = None
         for j, (light, preset) in enumerate(scen):
             ax = axes[i][j]
@@ -284,16 +181,16 @@ def heatmaps(values, out, title, unit_note):
                     for a in angs]
             image = ax.imshow(grid, cmap=cmap, vmin=-vmax, vmax=vmax, origin="lower",
                               aspect="auto")
+            digits = 0 if vmax >= 10 else 1 if vmax >= 2 else 2
             for ai, a in enumerate(angs):
                 for di, d in enumerate(dists):
                     if (d, a) not in mine:
                         continue
-                    v, _, held = mine[(d, a)]
-                    digits = 0 if vmax >= 10 else 1 if vmax >= 2 else 2
+                    v, explained = mine[(d, a)]
                     text = f"{v:+.{digits}f}"
                     if float(text) == 0:
                         text = f"{0:.{digits}f}"  # no "-0.0"
-                    ax.text(di, ai, text + ("*" if held else ""), ha="center",
+                    ax.text(di, ai, text + (" ✓" if explained else ""), ha="center",
                             va="center", fontsize=9,
                             color="white" if abs(v) > 0.6 * vmax else "black")
             ax.set_xticks(range(len(dists)), [f"{d:g}" for d in dists])
@@ -303,133 +200,166 @@ def heatmaps(values, out, title, unit_note):
             if i == len(metrics) - 1:
                 ax.set_xlabel("distance [m]")
             if j == 0:
-                ax.set_ylabel(f"{metric}\nangle")
-        fig.colorbar(image, ax=axes[i, :], shrink=0.9, label=metric)
-    fig.suptitle(title + "\n" + unit_note, fontsize=13)
+                ax.set_ylabel(f"{label}\noff-axis angle")
+        fig.colorbar(image, ax=axes[i, :], shrink=0.9, label=f"real − sim, {label}")
+    fig.suptitle(title + "\n" + note, fontsize=13)
     pc.save(fig, out)
 
 
-def note_figure(size, text, out):
-    fig = pc.plt.figure(figsize=size)
-    fig.text(0.5, 0.5, text, ha="center", va="center", fontsize=14, wrap=True)
-    pc.save(fig, out)
+def params_text(effect):
+    """'p = v [lo, hi]' of a shared effect; 'per scenario' otherwise (the report has them)."""
+    params, ci = effect.get("params"), effect.get("ci95")
+    if not isinstance(params, dict) or not params:
+        return ""
+    if effect.get("scope") == "per_scenario":
+        return "per scenario (values in report.md)"
+    parts = []
+    for p, v in params.items():
+        if not is_number(v):
+            continue
+        text = f"{p} = {v:.3g}"
+        band = ci.get(p) if isinstance(ci, dict) else None
+        if isinstance(band, list) and len(band) == 2 and all(is_number(b) for b in band):
+            text += f" [{band[0]:.3g}, {band[1]:.3g}]"
+        parts.append(text)
+    return "; ".join(parts)
 
 
 def effects_figure(doc, out):
-    effects = [e for e in doc.get("effects") or [] if isinstance(e, dict) and "name" in e]
-    if not effects:
-        note_figure(EFFECTS_FIGSIZE, "gap.json lists no effects", out)
-        return
-    selected = set(names_of(doc.get("selected")))
-    groups = confounded_groups(doc.get("confounded"))
+    effects = [e for e in doc["effects"] if isinstance(e, dict) and isinstance(e.get("name"), str)]
+    selected = [s["name"] for s in doc["selected"] if isinstance(s, dict) and "name" in s]
     partners = {}
-    for g in groups:
-        for n in g:
-            partners.setdefault(n, set()).update(x for x in g if x != n)
+    for c in doc["confounded"]:
+        pair = c.get("effects") if isinstance(c, dict) else None
+        if isinstance(pair, list) and len(pair) == 2:
+            r = c.get("correlation")
+            for a, b in (pair, pair[::-1]):
+                partners.setdefault(str(a), []).append(
+                    f"{b} (r = {r:.2f})" if is_number(r) else str(b))
     fig, (ax, axb) = pc.plt.subplots(1, 2, figsize=EFFECTS_FIGSIZE, sharey=True,
-                                     width_ratios=[3, 1], layout="constrained")
+                                     width_ratios=[2.4, 1], layout="constrained")
+    if not effects:
+        ax.text(0.5, 0.5, "no candidate effect was fitted", ha="center", transform=ax.transAxes)
+        fig.suptitle("Candidate effects")
+        pc.save(fig, out)
+        return
     ys = list(range(len(effects)))[::-1]  # best first, at the top
-    held = [first_number(e, ("shrink_heldout_pct",)) for e in effects]
-    ins = [first_number(e, ("shrink_in_sample_pct",)) for e in effects]
+    held = [e.get("shrink_heldout_pct") for e in effects]
+    ins = [e.get("shrink_in_sample_pct") for e in effects]
     h = 0.38
-    ax.barh([y + h / 2 for y in ys], [v or 0 for v in ins], height=h, color="0.75",
-            label="in-sample shrink")
-    ax.barh([y - h / 2 for y in ys], [v or 0 for v in held], height=h, color="tab:blue",
-            label="held-out shrink")
+    ax.barh([y + h / 2 for y in ys], [v if is_number(v) else 0 for v in ins], height=h,
+            color="0.75", label="in sample")
+    ax.barh([y - h / 2 for y in ys], [v if is_number(v) else 0 for v in held], height=h,
+            color="tab:blue", label="held-out cells (no part in the fit)")
     labels = []
     for e in effects:
-        params = e.get("params") or {}
-        ci = e.get("ci95")
-        parts = []
-        if isinstance(params, dict):
-            for p, v in params.items():
-                text = f"{p} = {v:.3g}" if isinstance(v, (int, float)) else f"{p} = {v}"
-                band = ci.get(p) if isinstance(ci, dict) else (ci if len(params) == 1 else None)
-                if isinstance(band, list) and len(band) == 2 and \
-                        all(isinstance(b, (int, float)) for b in band):
-                    text += f" [{band[0]:.3g}, {band[1]:.3g}]"
-                parts.append(text)
-        name = e["name"] + ("  ★ selected" if e["name"] in selected else "")
+        name = e["name"] + (" ★" if e["name"] in selected else "")
+        lines = [name]
         if e["name"] in partners:
-            name += "\n(confounded with " + ", ".join(sorted(partners[e["name"]])) + ")"
-        labels.append(name + ("\n" + "; ".join(parts) if parts else ""))
-    ax.set_yticks(ys, labels, fontsize=9)
+            lines.append("≈ " + ", ".join(partners[e["name"]]))
+        text = params_text(e)
+        if text:
+            lines.append(text)
+        labels.append("\n".join(lines))
+    ax.set_yticks(ys, labels, fontsize=8.5)
     for y, v in zip(ys, held):
-        if v is not None:
-            ax.text(max(v, 0) + 1, y - h / 2, f"{v:.0f}%", va="center", fontsize=9)
+        if is_number(v):
+            ax.text(v, y - h / 2, f" {v:.0f} %" if v >= 0 else f"{v:.0f} % ", va="center",
+                    ha="left" if v >= 0 else "right", fontsize=8.5)
     ax.axvline(0, color="k", lw=0.8)
-    ax.set_xlabel("gap shrink [%] (held out: cells that took no part in the fit)")
-    ax.legend(loc="lower right")
+    ax.set_xlabel("share of the baseline gap removed [%]")
+    ax.legend(loc="lower right", fontsize=9)
     ax.grid(axis="x", alpha=0.3)
-    bic = [first_number(e, ("delta_bic",)) for e in effects]
-    axb.barh(ys, [b or 0 for b in bic], color=["tab:green" if (b or 0) < 0 else "tab:red"
-                                               for b in bic])
-    span = max([abs(b) for b in bic if b is not None] or [1.0])
+    bic = [e.get("delta_bic") for e in effects]
+    earns = [bool(e.get("earns")) for e in effects]
+    axb.barh(ys, [b if is_number(b) else 0 for b in bic],
+             color=["tab:green" if ok else "0.6" for ok in earns])
     for y, b in zip(ys, bic):
-        if b is None:
-            axb.text(0, y, " no ΔBIC", va="center", fontsize=9)
-        elif abs(b) > 0.35 * span:  # inside the bar
-            axb.text(b / 2, y, f"{b:.1f}", va="center", ha="center", fontsize=9, color="white")
-        else:
-            axb.text(b, y, f" {b:.1f} " if b >= 0 else f"{b:.1f} ", va="center",
-                     ha="left" if b >= 0 else "right", fontsize=9)
+        if is_number(b):
+            axb.text(b, y, f" {b:.1f}" if b >= 0 else f"{b:.1f} ", va="center",
+                     ha="left" if b >= 0 else "right", fontsize=8.5)
+    lo = min([b for b in bic if is_number(b)] + [0.0])
+    hi = max([b for b in bic if is_number(b)] + [1.0])
+    axb.set_xlim(lo - 0.25 * (hi - lo), hi + 0.25 * (hi - lo))
     axb.axvline(0, color="k", lw=0.8)
-    axb.set_xlabel("ΔBIC (negative: better than none)")
+    axb.set_xlabel("ΔBIC (> 0: worth its parameters)\ngreen: earns ΔBIC and held-out gain")
     axb.grid(axis="x", alpha=0.3)
-    fig.suptitle("Candidate effects, each fitted alone, best first: how much of the gap each "
-                 "explains\n(parameter = value [95% interval])", fontsize=13)
+    fig.suptitle("Which effect: every candidate fitted alone, best first "
+                 "(★ selected; ≈ confounded on this design, not told apart)", fontsize=12)
     pc.save(fig, out)
 
 
-def before_after_figure(doc, values, out, path):
-    before = scalars(doc.get("baseline_gap"))
-    after = scalars(doc.get("remaining_gap"))
-    fig, (ax, axs) = pc.plt.subplots(1, 2, figsize=BEFORE_AFTER_FIGSIZE, layout="constrained")
-    labels = [k for k in before if k in after] or list(before)
-    if labels:
-        xs = range(len(labels))
-        w = 0.38
-        ax.bar([x - w / 2 for x in xs], [before[k] for k in labels], width=w, color="0.6",
-               label="baseline gap")
-        ax.bar([x + w / 2 for x in xs], [after.get(k, float("nan")) for k in labels], width=w,
-               color="tab:blue", label="remaining gap (selected effects added)")
-        for x, k in zip(xs, labels):
-            if k in after and before[k]:
-                ax.text(x + w / 2, after[k], f"{100 * (after[k] / before[k] - 1):+.0f}%",
-                        ha="center", va="bottom", fontsize=9)
-        ax.set_xticks(list(xs), labels, rotation=20, ha="right")
-        ax.legend()
-        ax.set_ylabel("gap (as in gap.json)")
-        ax.grid(axis="y", alpha=0.3)
-    else:
-        ax.text(0.5, 0.5, "no baseline_gap / remaining_gap numbers", ha="center",
-                transform=ax.transAxes)
-    ax.set_title("Whole gap before and after")
-    pairs = [(m, b, a, h) for _, m, b, a, h in values if a is not None]
-    if pairs:
-        metrics = list(dict.fromkeys(p[0] for p in pairs))
+def before_after_figure(doc, out, path):
+    how = doc["how_far"]
+    units = metric_units(doc, path)
+    groups = ["overall"] + list(units)
+    fig, (ax, axs) = pc.plt.subplots(1, 2, figsize=BEFORE_AFTER_FIGSIZE, layout="constrained",
+                                     width_ratios=[1.3, 1])
+    stages = [s for s in STAGES if isinstance(how.get(s[0]), dict)]
+    if not stages:
+        raise pc.InputError(f"{path}: how_far has none of "
+                            + ", ".join(s[0] for s in STAGES))
+    w = 0.8 / len(stages)
+    for k, (key, label, color) in enumerate(stages):
+        per = how[key].get("per_metric") or {}
+        vals = [how[key].get("overall") if g == "overall" else per.get(g) for g in groups]
+        xs = [x - 0.4 + w * (k + 0.5) for x in range(len(groups))]
+        ax.bar(xs, [v if is_number(v) else float("nan") for v in vals], width=w, color=color,
+               label=label)
+        if key == "selected_heldout":
+            base = how.get("baseline", {})
+            bper = base.get("per_metric") or {}
+            for x, g, v in zip(xs, groups, vals):
+                b = base.get("overall") if g == "overall" else bper.get(g)
+                if is_number(v) and is_number(b) and b > 0:
+                    ax.text(x, v, f"{100 * (v / b - 1):+.0f}%", ha="center", va="bottom",
+                            fontsize=8.5)
+    ax.set_yscale("log")
+    ax.axhline(1.0, color="k", lw=0.8, ls="--")
+    ax.text(len(groups) - 0.5, 1.05, "1 = the camera's repeatability", ha="right",
+            va="bottom", fontsize=8.5)
+    ax.set_xticks(range(len(groups)), ["all metrics"] + list(units), rotation=12)
+    ax.set_ylabel("gap: mean z² (z = (real − sim) / noise)")
+    ax.legend(fontsize=8.5, loc="upper right")
+    ax.grid(axis="y", alpha=0.3, which="both")
+    ax.set_title("Whole gap, per metric (% change held out)")
+    before, after, scen = [], [], []
+    for row in doc["cells"]:
+        zb, zh = row.get("z_baseline"), row.get("z_heldout")
+        if not (isinstance(zb, dict) and isinstance(zh, dict)):
+            continue
+        b = [zb[m] for m in units if is_number(zb.get(m))]
+        a = [zh[m] for m in units if is_number(zh.get(m))]
+        if b and a:
+            before.append(sum(v * v for v in b) / len(b))
+            after.append(sum(v * v for v in a) / len(a))
+            scen.append((str(row.get("light")), str(row.get("preset"))))
+    if before:
         colors = pc.plt.get_cmap("tab10")
-        lim = max(max(abs(p[1]), abs(p[2])) for p in pairs) * 1.05
-        for i, m in enumerate(metrics):
-            for held, style in ((False, dict(color=colors(i))),
-                                (True, dict(facecolors="none", edgecolors=colors(i)))):
-                pts = [p for p in pairs if p[0] == m and p[3] == held]
-                if pts:
-                    axs.scatter([abs(p[1]) for p in pts], [abs(p[2]) for p in pts], s=28,
-                                label=f"{m}" + (" (held out)" if held else ""), **style)
-        axs.plot([0, lim], [0, lim], "k", lw=0.8, label="no change")
-        axs.set_xlim(0, lim)
-        axs.set_ylim(0, lim)
-        axs.set_xlabel("|gap| before, per cell")
-        axs.set_ylabel("|gap| after, per cell")
-        axs.legend(fontsize=8, loc="upper left")
-        axs.grid(alpha=0.3)
+        order = sorted(set(scen), key=lambda s: pc.scenario_key(*s))
+        for i, s in enumerate(order):
+            pts = [(b, a) for b, a, c in zip(before, after, scen) if c == s]
+            axs.scatter([p[0] for p in pts], [p[1] for p in pts], s=22, color=colors(i),
+                        label=pc.scenario_title(*s), alpha=0.8)
+        lo = max(min(before + after), 1e-2) / 1.5
+        hi = max(before + after) * 1.5
+        axs.plot([lo, hi], [lo, hi], "k", lw=0.8, label="no change")
+        axs.set_xscale("log")
+        axs.set_yscale("log")
+        axs.set_xlim(lo, hi)
+        axs.set_ylim(lo, hi)
+        axs.set_xlabel("before: mean z² of the recording, configured sensor")
+        axs.set_ylabel("after: mean z², selected effects, held out")
+        axs.legend(fontsize=8.5, loc="upper left")
+        axs.grid(alpha=0.3, which="both")
     else:
-        axs.text(0.5, 0.5, f"{os.path.basename(path)} has no per-cell after values",
-                 ha="center", transform=axs.transAxes)
-    axs.set_title("Per cell: below the diagonal, the gap shrank")
-    fig.suptitle("The gap before and after the selected effects "
-                 f"({', '.join(names_of(doc.get('selected'))) or 'none selected'})")
+        axs.text(0.5, 0.5, "no cell has z_baseline and z_heldout", ha="center",
+                 transform=axs.transAxes)
+    axs.set_title("Per recording: below the diagonal, the gap shrank")
+    sel = ", ".join(s["name"] for s in doc["selected"] if isinstance(s, dict) and "name" in s)
+    shrink = how.get("shrink_heldout_pct")
+    fig.suptitle("How far the gap shrinks with the selected effects (" + (sel or "none selected")
+                 + (f"): {shrink:.1f} % held out" if is_number(shrink) else ")"), fontsize=12)
     pc.save(fig, out)
 
 
@@ -446,23 +376,21 @@ def main():
         if args.real or args.sim:
             raise pc.InputError("--gap and --real/--sim: give one or the other")
         doc = read_report(args.gap)
-        values, scaled = per_cell_values(doc, args.gap)
-        if values:
-            note = ("real - sim scaled by each metric's noise" if scaled else
-                    "real - sim as in gap.json") + "; mean over emitter rows; * held-out cell"
-            heatmaps(values, heat, "Where the simulator departs from reality: real - sim per "
-                     "cell", note)
-        else:
-            note_figure(HEAT_FIGSIZE, f"{args.gap} has no per-cell rows", heat)
+        values, units = cell_values(doc, args.gap)
+        labels = {m: f"{m} [{u}]" if u else m for m, u in units.items()}
+        n = len(doc["cells"])
+        heatmaps(values, heat, f"Where the simulator departs from the camera: real − sim per "
+                 f"cell ({os.path.basename(args.gap)}, {n} recordings)",
+                 "mean over a cell's emitter rows; ✓ no longer significant once the selected "
+                 "effects are added (held out)", labels)
         effects_figure(doc, os.path.join(args.out_dir, "gap_effects.png"))
-        before_after_figure(doc, values, os.path.join(args.out_dir, "gap_before_after.png"),
-                            args.gap)
+        before_after_figure(doc, os.path.join(args.out_dir, "gap_before_after.png"), args.gap)
         return
     if not (args.real and args.sim):
         raise pc.InputError("give --gap gap.json, or both --real and --sim")
     values, n, nr, ns = csv_values(args.real, args.sim)
-    heatmaps(values, heat, "Where the simulator departs from reality: real - sim per cell "
-             f"({os.path.basename(args.real)} - {os.path.basename(args.sim)})",
+    heatmaps(values, heat, "Where the simulator departs from the camera: real − sim per cell "
+             f"({os.path.basename(args.real)} − {os.path.basename(args.sim)})",
              f"metrics' own units; mean over emitter rows; {n} matched rows of {nr} real, "
              f"{ns} simulated")
 

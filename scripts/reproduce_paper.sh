@@ -119,7 +119,13 @@ if [ -n "${DOCS_DIR:-}" ]; then
   for f in fig4_error_vs_distance fig5_iso_error fig6_corrected margin fig4_sim_extract; do
     if [ -f "$OUT/figures/$f.png" ]; then cp "$OUT/figures/$f.png" "$DOCS_DIR/$f.png"; fi
   done
-  cp "$OUT/figures/real_minus_sim/gap_heatmaps.png" "$DOCS_DIR/gap_real_minus_sim.png"
+  if [ -f "$OUT/figures/gap/gap_effects.png" ]; then
+    mkdir -p "$DOCS_DIR/gap"
+    for f in gap_heatmaps gap_effects gap_before_after; do
+      cp "$OUT/figures/gap/$f.png" "$DOCS_DIR/gap/$f.png"
+    done
+    cp "$OUT/gap/gap.json" "$OUT/gap/report.md" "$DOCS_DIR/gap/"
+  fi
   echo "README figures copied into $DOCS_DIR/"
 fi
 TOTAL=$(since "$T_START")
