@@ -1,6 +1,8 @@
 #include "model/fit_groups.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -173,6 +175,24 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
   return out;
 }
 
+namespace {
+
+// P(X ≥ m) for X ~ Binomial(n, p).
+double BinomialUpperTail(int n, int m, double p) {
+  if (m <= 0) return 1.0;
+  if (p <= 0.0) return 0.0;
+  double below = 0.0;  // P(X < m)
+  for (int x = 0; x < m && x <= n; ++x) {
+    const double log_term = std::lgamma(n + 1.0) - std::lgamma(x + 1.0) -
+                            std::lgamma(n - x + 1.0) + x * std::log(p) +
+                            (n - x) * std::log1p(-p);
+    below += std::exp(log_term);
+  }
+  return std::clamp(1.0 - below, 0.0, 1.0);
+}
+
+}  // namespace
+
 std::vector<CoverageRow> Coverage(const FitReport& report, double k) {
   std::map<long long, CoverageRow> rows;
   const size_t groups = report.groups.size();
@@ -197,6 +217,7 @@ std::vector<CoverageRow> Coverage(const FitReport& report, double k) {
       row.beyond += beyond;
       row.mean_error_m += error_m;
       row.mean_std_m += std_m;
+      row.rms_z += (error_m / std_m) * (error_m / std_m);
       ++row.group_n[g];
       row.group_beyond[g] += beyond;
       row.group_mean_error_m[g] += error_m;
@@ -206,6 +227,8 @@ std::vector<CoverageRow> Coverage(const FitReport& report, double k) {
   for (auto& [key, row] : rows) {
     row.mean_error_m /= row.n;
     row.mean_std_m /= row.n;
+    row.rms_z = std::sqrt(row.rms_z / row.n);
+    row.promise_p = BinomialUpperTail(row.n, row.beyond, 0.5 * std::erfc(k / std::sqrt(2.0)));
     for (size_t g = 0; g < groups; ++g)
       if (row.group_n[g] > 0) row.group_mean_error_m[g] /= row.group_n[g];
     out.push_back(row);
@@ -221,8 +244,8 @@ std::string FormatCoverageTable(const FitReport& report, double k) {
                        ? "none"
                        : CvSchemeName(report.groups[0].cv.front().scheme).c_str());
   std::string out = buf;
-  std::snprintf(buf, sizeof(buf), "%10s %4s %8s %7s %12s %10s", "distance_m", "n", "beyond",
-                "share", "mean_err_m", "mean_std_m");
+  std::snprintf(buf, sizeof(buf), "%10s %4s %8s %7s %9s %12s %10s %6s", "distance_m", "n",
+                "beyond", "share", "p_promise", "mean_err_m", "mean_std_m", "rms_z");
   out += buf;
   for (const auto& g : report.groups) {
     std::snprintf(buf, sizeof(buf), " %18s", (g.group.Label() + " b/n err").c_str());
@@ -230,8 +253,9 @@ std::string FormatCoverageTable(const FitReport& report, double k) {
   }
   out += "\n";
   for (const CoverageRow& r : Coverage(report, k)) {
-    std::snprintf(buf, sizeof(buf), "%10g %4d %8d %6.1f%% %+12.3f %10.3f", r.distance_m, r.n,
-                  r.beyond, 100.0 * r.beyond / std::max(1, r.n), r.mean_error_m, r.mean_std_m);
+    std::snprintf(buf, sizeof(buf), "%10g %4d %8d %6.1f%% %9.2f %+12.3f %10.3f %6.2f",
+                  r.distance_m, r.n, r.beyond, 100.0 * r.beyond / std::max(1, r.n), r.promise_p,
+                  r.mean_error_m, r.mean_std_m, r.rms_z);
     out += buf;
     for (size_t g = 0; g < r.group_n.size(); ++g) {
       std::snprintf(buf, sizeof(buf), " %9d/%-2d %+6.3f", r.group_beyond[g], r.group_n[g],
@@ -240,6 +264,12 @@ std::string FormatCoverageTable(const FitReport& report, double k) {
     }
     out += "\n";
   }
+  std::snprintf(buf, sizeof(buf),
+                "p_promise: chance of at least that many truths beyond if each had exactly the "
+                "normal promise %.2f%%; rms_z: rms of (corrected - truth)/sigma, 1 when sigma is "
+                "the right size\n",
+                50.0 * std::erfc(k / std::sqrt(2.0)));
+  out += buf;
   return out;
 }
 

@@ -66,6 +66,10 @@ struct CoverageRow {
   int beyond = 0;                   // truth < corrected − k·σ
   double mean_error_m = 0.0;        // mean of corrected − truth (+: reads farther than truth)
   double mean_std_m = 0.0;          // mean held-out σ
+  double rms_z = 0.0;               // √mean((corrected − truth)/σ)²: 1 when σ is the right size
+  // P(X ≥ beyond) for X ~ Binomial(n, Φ(−k)): how likely so many misses are if the margin keeps
+  // exactly the normal promise (small: the margin is too narrow at this distance).
+  double promise_p = 1.0;
   std::vector<int> group_n, group_beyond;  // per group, in report order
   std::vector<double> group_mean_error_m;
 };

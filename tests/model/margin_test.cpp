@@ -182,6 +182,12 @@ TEST(Coverage, ArticleDataLeaveOneTestPointOut) {
   ASSERT_EQ(coverage.size(), 4u);
   for (const auto& c : coverage) {
     EXPECT_LE(c.beyond, c.distance_m < 16 ? 0 : 1) << c.distance_m << " m";
+    // σ of the right size (rms of error/σ near 1), and the misses no rarer than the normal
+    // promise allows: one of 32 happens with probability 1 − (1 − 0.0228)^32 = 0.52.
+    EXPECT_GT(c.rms_z, 0.7) << c.distance_m << " m";
+    EXPECT_LT(c.rms_z, 1.5) << c.distance_m << " m";
+    EXPECT_NEAR(c.promise_p, c.beyond == 0 ? 1.0 : 1.0 - std::pow(1.0 - 0.02275, 32), 2e-3)
+        << c.distance_m << " m";
     for (size_t g = 0; g < c.group_mean_error_m.size(); ++g) {
       if (c.distance_m == 4.0) {
         EXPECT_LE(c.group_mean_error_m[g], 0.05) << report.groups[g].group.Label();
