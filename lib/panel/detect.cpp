@@ -17,6 +17,8 @@
 #include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
 #include <pcl/sample_consensus/sac_model_plane.h>
 #include <pcl/search/kdtree.h>
+
+#include "common/seeded_ransac.h"
 #include <pcl/segmentation/extract_clusters.h>
 
 namespace depthbias::panel {
@@ -27,23 +29,8 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
-// PCL's models seed their sampler with a fixed 12345; these take the seed from the parameters.
-template <class Model>
-class Seeded : public Model {
- public:
-  Seeded(const typename Cloud::ConstPtr& cloud, const pcl::Indices& indices,
-         std::uint64_t seed)
-      : Model(cloud, indices) {
-    this->rng_alg_.seed(static_cast<unsigned>(seed ^ (seed >> 32)));
-  }
-};
-
-// RANSAC that reports how many iterations it ran.
-class CountingRansac : public pcl::RandomSampleConsensus<pcl::PointXYZ> {
- public:
-  using pcl::RandomSampleConsensus<pcl::PointXYZ>::RandomSampleConsensus;
-  int iterations() const { return iterations_; }
-};
+using common::CountingRansac;
+using common::Seeded;
 
 struct RansacOut {
   bool ok = false;
