@@ -70,6 +70,8 @@ function(depthbias_test name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest_main)
+  # tests/support/: helpers every test may use ("support/tools.h").
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
   target_compile_definitions(${name} PRIVATE
     DEPTHBIAS_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     DEPTHBIAS_BINARY_DIR="${PROJECT_BINARY_DIR}"

@@ -2,7 +2,6 @@
 // bad input refused in one line that names it, with no output left behind.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -11,34 +10,21 @@
 #include <sstream>
 #include <string>
 
+#include "support/tools.h"
+
 namespace depthbias {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string Bin(const std::string& app) {
-  const char* b = std::getenv("DEPTHBIAS_BIN");
-  return std::string(b ? b : DEPTHBIAS_BINARY_DIR "/apps") + "/" + app;
-}
+using test_support::Bin;
+using test_support::ReadFile;
+using test_support::RunShell;
 
-std::string Read(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+using Result = test_support::ToolRun;
 
 Result Exec(const std::string& args, const fs::path& dir) {
-  const std::string cmd = Bin("obstacle_detector") + " " + args + " > " +
-                          (dir / "stdout").string() + " 2> " + (dir / "stderr").string();
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Read(dir / "stdout"),
-          Read(dir / "stderr")};
+  return RunShell(Bin("obstacle_detector") + " " + args, dir);
 }
 
 const std::string kBag = DEPTHBIAS_TEST_DATA "/bags/d455_depth_1mm.bag";  // HA, emitter on
@@ -78,7 +64,7 @@ TEST_F(ObstacleDetectorCli, HelpAndARunOnALibrealsenseRecording) {
   const Result r = Exec("--weights " + weights_ + " --out " + out_ + " " + kBag, dir_);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("daylight/HA/emitter on"), std::string::npos) << r.out;  // from options
-  const std::string lines = Read(out_);
+  const std::string lines = ReadFile(out_);
   EXPECT_EQ(std::count(lines.begin(), lines.end(), '\n'), 4);  // one line per frame
   EXPECT_EQ(lines.rfind("{\"frame\": 0, \"timestamp_s\": 1000.000000, \"obstacles\": [", 0), 0u)
       << lines;
@@ -98,7 +84,7 @@ TEST_F(ObstacleDetectorCli, BadInputsFailInOneLineWithoutOutput) {
   ExpectCleanFailure(w + "--config " + (dir_ / "bad.yaml").string() + " " + kBag,
                      "bad.yaml: unknown key 'cluster.tolerance_m'");
   // Weights without a range-dependent margin (schema 1) are refused.
-  std::string text = Read(weights_);
+  std::string text = ReadFile(weights_);
   text.replace(text.find("depthbias.weights/2"), 19, "depthbias.weights/1");
   for (const char* key : {"near_guard:", "noise_pooled:"}) {
     const size_t at = text.find(key);
@@ -111,7 +97,7 @@ TEST_F(ObstacleDetectorCli, BadInputsFailInOneLineWithoutOutput) {
   std::ofstream(dir_ / "old.yaml") << text;
   ExpectCleanFailure("--weights " + (dir_ / "old.yaml").string() + " --out " + out_ + " " + kBag,
                      "refit with fit_bias");
-  EXPECT_EQ(Read(weights_).find("depthbias.weights/2") != std::string::npos, true);  // untouched
+  EXPECT_EQ(ReadFile(weights_).find("depthbias.weights/2") != std::string::npos, true);  // untouched
 }
 
 }  // namespace

@@ -18,31 +18,22 @@
 
 #include "io/csv.h"
 #include "io/weights_yaml.h"
+#include "support/tools.h"
 
 namespace depthbias {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string Bin(const std::string& app) {
-  const char* b = std::getenv("DEPTHBIAS_BIN");
-  return std::string(b ? b : DEPTHBIAS_BINARY_DIR "/apps") + "/" + app;
-}
-
-std::string Read(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test_support::Bin;
+using test_support::ReadFile;
+using test_support::RunShell;
 
 // Runs a command in dir; its exit status (stderr in *err).
 int RunApp(const std::string& args, const fs::path& dir, std::string* err) {
-  const std::string cmd =
-      args + " > " + (dir / "stdout.txt").string() + " 2> " + (dir / "stderr.txt").string();
-  const int status = std::system(cmd.c_str());
-  *err = Read(dir / "stderr.txt") + Read(dir / "stdout.txt");
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto r = RunShell(args, dir);
+  *err = r.err + r.out;
+  return r.code;
 }
 
 constexpr char kEffects[] = "effects:\n  - {name: disparity_offset, delta_px: -0.2}\n";
@@ -149,7 +140,7 @@ TEST(ObstacleDetectorApp, CalibratedUnitFindsEveryPersonWithHonestSafeRanges) {
 
   // 3. Every frame's obstacles against the truth.
   std::vector<YAML::Node> frames;
-  std::istringstream lines(Read(d / "detections.jsonl"));
+  std::istringstream lines(ReadFile(d / "detections.jsonl"));
   for (std::string line; std::getline(lines, line);) frames.push_back(YAML::Load(line));
   ASSERT_EQ(frames.size(), 20u);
   int safe_beyond = 0, matched = 0;

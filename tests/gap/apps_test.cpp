@@ -2,7 +2,6 @@
 // line naming the file (exit 2), a diagnosis writes gap.json and report.md with the documented
 // keys, and the calibration writes a sensor file the simulator reads back.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -13,16 +12,16 @@
 #include "io/atomic_file.h"
 #include "io/metrics_csv.h"
 #include "sim/config_yaml.h"
+#include "support/tools.h"
 
 namespace depthbias {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string Bin(const std::string& app) {
-  const char* b = std::getenv("DEPTHBIAS_BIN");
-  return std::string(b ? b : DEPTHBIAS_BINARY_DIR "/apps") + "/" + app;
-}
+using test_support::Bin;
+using test_support::ReadFile;
+using test_support::RunShell;
 
 fs::path Dir(const std::string& name) {
   const fs::path d = fs::path(DEPTHBIAS_BINARY_DIR) / "test_tmp" / ("gap_apps_" + name);
@@ -31,19 +30,11 @@ fs::path Dir(const std::string& name) {
   return d;
 }
 
-std::string Read(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
+// Runs a command from the source tree; its exit status (stderr in *err).
 int RunCommand(const std::string& args, const fs::path& dir, std::string* err = nullptr) {
-  const std::string cmd = "cd " + std::string(DEPTHBIAS_SOURCE_DIR) + " && " + args + " > " +
-                          (dir / "stdout.txt").string() + " 2> " + (dir / "stderr.txt").string();
-  const int status = std::system(cmd.c_str());
-  if (err) *err = Read(dir / "stderr.txt");
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto r = RunShell("cd " + std::string(DEPTHBIAS_SOURCE_DIR) + " && " + args, dir);
+  if (err) *err = r.err;
+  return r.code;
 }
 
 const std::string kArticle = DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv";
@@ -102,17 +93,17 @@ TEST(DiagnoseGapApp, WritesGapJsonAndReport) {
                 d, &err),
             0)
       << err;
-  const std::string json = Read(d / "out" / "gap.json");
+  const std::string json = ReadFile(d / "out" / "gap.json");
   for (const char* key : {"\"baseline_gap\"", "\"localization\"", "\"effects\"", "\"selected\"",
                           "\"confounded\"", "\"remaining_gap\"", "\"cells\"", "\"delta_bic\"",
                           "\"shrink_in_sample_pct\"", "\"shrink_heldout_pct\"", "\"ci95\"",
                           "\"params\"", "\"noise_method\""})
     EXPECT_NE(json.find(key), std::string::npos) << key;
-  const std::string md = Read(d / "out" / "report.md");
+  const std::string md = ReadFile(d / "out" / "report.md");
   for (const char* part : {"## 1. The gap", "## 2. Where", "## 3. Which effect", "## 4. How far",
                            "## 5. What is left"})
     EXPECT_NE(md.find(part), std::string::npos) << part;
-  EXPECT_NE(Read(d / "stdout.txt").find("how far:"), std::string::npos);
+  EXPECT_NE(ReadFile(d / "stdout.txt").find("how far:"), std::string::npos);
   // Never writes over an input.
   EXPECT_EQ(RunCommand(Bin("diagnose_gap") + " --real " + (d / "out" / "gap.json").string() +
                            " --out " +
@@ -133,12 +124,12 @@ TEST(SimulateApp, CalibrateToWritesASensorTheSimulatorReads) {
       << err;
   sim::SensorParams s;
   std::string why;
-  ASSERT_TRUE(sim::ParseSensorYaml(Read(out), &s, &why)) << why;
+  ASSERT_TRUE(sim::ParseSensorYaml(ReadFile(out), &s, &why)) << why;
   bool found = false;
   const sim::ScenarioParams sc = s.Scenario("sunset", "HD", &found);
   EXPECT_TRUE(found);
   EXPECT_GT(sc.sigma_d_px, 0.01);
-  EXPECT_NE(Read(out).find("calibration:"), std::string::npos);
+  EXPECT_NE(ReadFile(out).find("calibration:"), std::string::npos);
 }
 
 }  // namespace

@@ -5,7 +5,6 @@
 #include <signal.h>
 #include <spawn.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -24,6 +23,7 @@
 #include "io/bag.h"
 #include "io/csv.h"
 #include "io/metrics_csv.h"
+#include "support/tools.h"
 #include "test_dir.h"
 
 extern char** environ;
@@ -39,18 +39,8 @@ const std::string kArticle = kSource + "/config/data/paper_d455_outdoor.csv";
 const std::string kDemo = kSource + "/config/protocol_demo.yaml";
 const std::string kFixture = kSource + "/tests/data/bags/d455_depth_1mm.bag";
 
-std::string Bin(const std::string& app) {
-  const char* b = std::getenv("DEPTHBIAS_BIN");
-  return std::string(b ? b : DEPTHBIAS_BINARY_DIR "/apps") + "/" + app;
-}
-
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
+using test_support::Bin;
+using test_support::ReadFile;
 void Put(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
 bool Has(const std::string& text, const std::string& needle) {
@@ -59,22 +49,15 @@ bool Has(const std::string& text, const std::string& needle) {
 
 int Lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
 
-struct AppRun {
-  int code = -1;  // exit status, or 128 + signal
-  std::string out, err;
-};
+using AppRun = test_support::ToolRun;
 
-// Runs a shell command line, `prefix` first in the same shell (ulimit, trap, export).
+// Runs a shell command line, `prefix` first in the same shell (ulimit, trap, export); what it
+// wrote is removed from dir, so that dir shows only what the tool left.
 AppRun Shell(const std::string& cmd, const fs::path& dir, const std::string& prefix = "") {
-  const std::string line = prefix + (prefix.empty() ? "" : "; ") + "exec " + cmd + " > " +
-                           (dir / "stdout").string() + " 2> " + (dir / "stderr").string();
-  const int status = std::system(("bash -c '" + line + "'").c_str());
-  AppRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = Slurp(dir / "stdout");
-  r.err = Slurp(dir / "stderr");
-  fs::remove(dir / "stdout");
-  fs::remove(dir / "stderr");
+  const std::string line = prefix + (prefix.empty() ? "" : "; ") + "exec " + cmd;
+  AppRun r = test_support::RunShell("bash -c '" + line + "'", dir);
+  fs::remove(dir / "stdout.txt");
+  fs::remove(dir / "stderr.txt");
   return r;
 }
 
@@ -113,7 +96,7 @@ void ForgedBag(const fs::path& path, double fx) {
     }
     w.Close();
   }
-  std::string bytes = Slurp(path);
+  std::string bytes = ReadFile(path);
   const double from = 12.3456789;
   const std::string a(reinterpret_cast<const char*>(&from), 8);
   const std::string b(reinterpret_cast<const char*>(&fx), 8);
@@ -188,7 +171,7 @@ TEST(HostileApps, YamlBombsAreRefusedNamingTheFile) {
   const auto start = std::chrono::steady_clock::now();
   ExpectRefused(Exec("panel_extract", "--config " + y.string() + " " + kFixture, d), says,
                 "panel_extract --config");
-  Put(d / "m.csv", Slurp(kArticle));
+  Put(d / "m.csv", ReadFile(kArticle));
   ExpectRefused(Exec("correct_depth", "--weights " + y.string() + " --in " +
                                           (d / "m.csv").string() + " --out " +
                                           (d / "c.csv").string(), d),
@@ -214,12 +197,12 @@ TEST(HostileApps, NoOutputLandsOnAnInputOrReplacesADevice) {
   const fs::path d = FreshDir("hostile_apps");
   const fs::path own = d / "sim_daylight_emitter-on_8m_0deg_HD.bag";  // a recording's own name
   fs::copy_file(kFixture, own);
-  const std::string before = Slurp(own);
+  const std::string before = ReadFile(own);
   const AppRun r = Exec("simulate", "--protocol " + kDemo + " --frames 2 --sensor-from " +
                                      own.string() + " --out-dir " + d.string(), d);
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(Has(r.err, own.string() + ": is also an input")) << r.err;
-  EXPECT_EQ(Slurp(own), before);
+  EXPECT_EQ(ReadFile(own), before);
   EXPECT_EQ(Files(d), std::vector<std::string>({own.filename().string()}));
   // Devices are written in place (as root a rename would replace them with a file).
   const AppRun null_out = Exec("fit_bias", "--in " + kArticle + " --out /dev/null --cv none", d);
@@ -293,7 +276,7 @@ TEST(HostileApps, InterruptedSimulationLeavesNothing) {
         for (const auto& e : fs::directory_iterator(out, ec))
           started = started || e.path().extension() == ".part";
     }
-    EXPECT_TRUE(started) << Slurp(d / "err");
+    EXPECT_TRUE(started) << ReadFile(d / "err");
     ::kill(pid, sig);
     int status = 0;
     ::waitpid(pid, &status, 0);
@@ -340,7 +323,7 @@ TEST(HostileApps, AbsurdNumbersAreRefusedNotPassedOn) {
                 "column 'distance_m': -4 is outside (0, 1000] m", "negative distances");
   // Weights whose margin would shrink: a negative variance, an indefinite covariance.
   Put(d / "m.csv", kHeader + ok_row);
-  std::string weights = Slurp(w);
+  std::string weights = ReadFile(w);
   const size_t cov = weights.find("covariance:");
   ASSERT_NE(cov, std::string::npos);
   const size_t first = weights.find("[", cov) + 1;

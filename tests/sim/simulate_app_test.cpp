@@ -14,16 +14,16 @@
 #include "io/bag.h"
 #include "io/manifest.h"
 #include "io/metrics_csv.h"
+#include "support/tools.h"
 
 namespace depthbias {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string Bin(const std::string& app) {
-  const char* b = std::getenv("DEPTHBIAS_BIN");
-  return std::string(b ? b : DEPTHBIAS_BINARY_DIR "/apps") + "/" + app;
-}
+using test_support::Bin;
+using test_support::ReadFile;
+using test_support::RunShell;
 
 fs::path Dir(const std::string& name) {
   const fs::path d = fs::path(DEPTHBIAS_BINARY_DIR) / "simulate_app_test" / name;
@@ -36,21 +36,11 @@ void Write(const fs::path& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
-std::string Read(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // Runs a command; returns its exit status and what it wrote to stderr.
 int RunCommand(const std::string& args, const fs::path& dir, std::string* err = nullptr) {
-  const fs::path err_file = dir / "stderr.txt";
-  const std::string cmd = args + " > " + (dir / "stdout.txt").string() + " 2> " +
-                          err_file.string();
-  const int status = std::system(cmd.c_str());
-  if (err) *err = Read(err_file);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto r = RunShell(args, dir);
+  if (err) *err = r.err;
+  return r.code;
 }
 
 const std::string kProtocol = DEPTHBIAS_SOURCE_DIR "/config/protocol_paper.yaml";
@@ -60,7 +50,7 @@ TEST(SimulateApp, MetricsOnlyGivesEveryCell) {
   const std::string out = (d / "m.csv").string();
   const std::string cmd =
       Bin("simulate") + " --protocol " + kProtocol + " --metrics-only --frames 2 --out " + out;
-  ASSERT_EQ(RunCommand(cmd, d), 0) << Read(d / "stderr.txt");
+  ASSERT_EQ(RunCommand(cmd, d), 0) << ReadFile(d / "stderr.txt");
   const auto rows = io::ReadMetricsCsv(out);
   ASSERT_EQ(rows.size(), 128u);
   for (const auto& r : rows) {
@@ -115,7 +105,7 @@ TEST(SimulateApp, BadInputGivesOneClearLine) {
                        d, &err),
             2);
   EXPECT_NE(err.find("is also an input"), std::string::npos) << err;
-  EXPECT_EQ(Read(kept), "protocol: {frames: 2}\n");
+  EXPECT_EQ(ReadFile(kept), "protocol: {frames: 2}\n");
   // A file that is not YAML at all is named in one short line.
   const fs::path csv = d / "table.csv";
   Write(csv, std::string("bag,light\n") + std::string(5000, 'x') + ",daylight\n");
@@ -141,9 +131,9 @@ TEST(SimulateApp, BagsDoNotDependOnThreads) {
     const std::string sim = Bin("simulate") + " --protocol " + protocol.string() +
                             " --sensor builtin --threads " + std::to_string(threads) +
                             " --out-dir " + out.string();
-    ASSERT_EQ(RunCommand(sim, d), 0) << Read(d / "stderr.txt");
+    ASSERT_EQ(RunCommand(sim, d), 0) << ReadFile(d / "stderr.txt");
     for (const auto& e : fs::directory_iterator(out))
-      bags[threads][e.path().filename().string()] = Read(e.path());
+      bags[threads][e.path().filename().string()] = ReadFile(e.path());
   }
   ASSERT_EQ(bags[1].size(), 5u);  // 4 bags and the manifest
   for (const auto& [name, bytes] : bags[1]) {
@@ -301,14 +291,14 @@ TEST(SimulateApp, PanelExtractOnWrittenBagsAgreesWithMetricsOnlyOnEveryCell) {
       const std::string sim = Bin("simulate") + " --protocol " + protocol.string() +
                               " --sensor " + sensor.string() + " --seed 11";
       ASSERT_EQ(RunCommand(sim + " --out-dir " + (run / "bags").string(), run), 0)
-          << Read(run / "stderr.txt");
+          << ReadFile(run / "stderr.txt");
       ASSERT_EQ(RunCommand(sim + " --metrics-only --out " + (run / "sim.csv").string(), run), 0)
-          << Read(run / "stderr.txt");
+          << ReadFile(run / "stderr.txt");
       // Two jobs: the batch reads several bags at once, as users run it.
       const std::string extract = Bin("panel_extract") + " --jobs 2 --manifest " +
                                   (run / "bags" / "manifest.csv").string() + " --out " +
                                   (run / "extract.csv").string() + " " + (run / "bags").string();
-      ASSERT_EQ(RunCommand(extract, run), 0) << Read(run / "stderr.txt");
+      ASSERT_EQ(RunCommand(extract, run), 0) << ReadFile(run / "stderr.txt");
       const io::Manifest manifest = io::ReadManifest((run / "bags" / "manifest.csv").string());
       std::map<std::string, records::PanelMetrics> extracted;
       for (const auto& r : io::ReadMetricsCsv((run / "extract.csv").string()))
