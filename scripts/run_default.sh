@@ -6,7 +6,8 @@
 #   3. corrects every measurement with it (corrected distance, predicted bias, margin);
 #   4. simulates the article's 128 recordings with the calibrated D455 model (metrics only);
 #   5. end to end on recordings: simulates 8 of them as RealSense bags (config/protocol_demo.yaml),
-#      lists one with bag_info, and measures them all with panel_extract (RANSAC, no boxes).
+#      lists one with bag_info, and measures them all with panel_extract (RANSAC, no boxes);
+#   6. diagnoses the gap between the article's table and the simulator (diagnose_gap, about 25 s).
 # Outputs go to OUT_DIR (default out/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,5 +38,8 @@ rm -rf "$OUT/sim_bags"
 "$BIN/panel_extract" --manifest "$OUT/sim_bags/manifest.csv" --out "$OUT/sim_extract.csv" \
   --panels-out "$OUT/sim_panels.json" "$OUT/sim_bags"
 echo
+echo "== the sim-to-real gap of the article's table (diagnose_gap)"
+"$BIN/diagnose_gap" --real "$DATA" --out "$OUT/gap"
+echo
 echo "outputs in $OUT/: weights_paper6.yaml weights.yaml corrected.csv sim_metrics.csv"
-echo "  sim_bags/ (bags + manifest.csv) sim_extract.csv sim_panels.json"
+echo "  sim_bags/ (bags + manifest.csv) sim_extract.csv sim_panels.json gap/ (gap.json, report.md)"
