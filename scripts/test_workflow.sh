@@ -2,10 +2,10 @@
 # The Snakemake workflow (workflow/Snakefile) on one machine, on two small simulated units:
 #   1. simulates two units with BUILD_DIR/apps/simulate (6 recordings of 3 frames each, 1280×720,
 #      two seeds), each a folder of bags with its manifest.csv;
-#   2. runs `snakemake -j 2` with the project's .venv on them (tools from BUILD_DIR/apps; when
-#      diagnose_gap is not built there, a stand-in that only writes gap/ checks the rule's wiring);
+#   2. runs `snakemake -j 2` with the project's .venv on them (tools from BUILD_DIR/apps);
 #   3. checks the outputs: one shard per recording, each unit's metrics.csv identical to one
-#      panel_extract run over the unit's folder, weights.yaml with a group, gap/ per unit; and
+#      panel_extract run over the unit's folder, weights.yaml with a group, a gap report per unit
+#      (gap.json with its baseline_gap, report.md); and
 #      that a second run has nothing to do; and, when snakemake-executor-plugin-slurm is installed,
 #      that the cluster profile (workflow/profiles/slurm) plans the same jobs (dry run).
 #   bash scripts/test_workflow.sh [BUILD_DIR]        (ctest runs it: label "workflow")
@@ -51,25 +51,11 @@ for unit in unit_a unit_b; do
   seed=$((seed + 1))
 done
 
-# 2. The workflow. The tools folder holds the built tools; diagnose_gap, when not built, is a
-# stand-in that checks its arguments and writes the report folder, so the rule runs either way.
+# 2. The workflow, with the built tools.
 for tool in "$APPS"/*; do
   [ -x "$tool" ] && [ -f "$tool" ] && ln -s "$tool" "$WORK/tools/"
 done
-GAP_TOOL="built"
-if [ ! -e "$WORK/tools/diagnose_gap" ]; then
-  GAP_TOOL="stand-in (apps/diagnose_gap not built)"
-  cat >"$WORK/tools/diagnose_gap" <<'EOF'
-#!/usr/bin/env bash
-# Stand-in for diagnose_gap in scripts/test_workflow.sh: diagnose_gap --real REAL.csv --out DIR
-set -euo pipefail
-[ $# -eq 4 ] && [ "$1" = --real ] && [ -f "$2" ] && [ "$3" = --out ] ||
-  { echo "diagnose_gap stand-in: bad arguments: $*" >&2; exit 2; }
-mkdir -p "$4"
-echo '{"stand_in": true}' >"$4/gap.json"
-EOF
-  chmod +x "$WORK/tools/diagnose_gap"
-fi
+[ -e "$WORK/tools/diagnose_gap" ] || fail "$APPS/diagnose_gap is not built"
 (cd "$WORK" && "$SNAKEMAKE" -s "$ROOT/workflow/Snakefile" -j 2 \
     --config units_dir="$WORK/units" out_dir="$WORK/results" tools="$WORK/tools" \
     diagnose_gap=true) >"$WORK/snakemake.log" 2>&1 ||
@@ -92,7 +78,9 @@ for unit in unit_a unit_b; do
   [ "$ok_rows" -eq "$bags" ] || fail "$unit: $ok_rows of $bags rows ok in $out/metrics.csv"
   grep -q '^groups:' "$out/weights.yaml" && grep -q 'light: daylight' "$out/weights.yaml" ||
     fail "$unit: $out/weights.yaml holds no fitted group"
-  [ -f "$out/gap/gap.json" ] || fail "$unit: no gap/gap.json"
+  grep -q '"baseline_gap"' "$out/gap/gap.json" 2>/dev/null ||
+    fail "$unit: no gap report in gap/gap.json"
+  [ -s "$out/gap/report.md" ] || fail "$unit: no gap/report.md"
 done
 (cd "$WORK" && "$SNAKEMAKE" -s "$ROOT/workflow/Snakefile" -n --quiet \
     --config units_dir="$WORK/units" out_dir="$WORK/results" tools="$WORK/tools" \
@@ -117,5 +105,5 @@ fi
 
 jobs=$(grep -cE '^(local)?rule ' "$WORK/snakemake.log" || true)
 echo "test_workflow: 2 units × 6 recordings: $jobs jobs, outputs checked, a second run has" \
-  "nothing to do; diagnose_gap $GAP_TOOL; slurm profile $PROFILE;" \
+  "nothing to do; slurm profile $PROFILE;" \
   "$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }') s simulate + snakemake"
