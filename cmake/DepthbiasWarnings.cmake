@@ -24,6 +24,11 @@ function(depthbias_library name)
     target_compile_features(depthbias_${name} PUBLIC cxx_std_17)
     set_target_properties(depthbias_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
     depthbias_warnings(depthbias_${name})
+    if(DEPTHBIAS_SANITIZE)
+      # An instrumented archive needs the sanitizers' runtime wherever it is linked, consumers of
+      # the installed package included.
+      target_link_options(depthbias_${name} INTERFACE -fsanitize=address,undefined)
+    endif()
   else()
     add_library(depthbias_${name} INTERFACE)
     target_include_directories(depthbias_${name} INTERFACE ${includes})

@@ -58,8 +58,11 @@ fi
 [ -f "$PREFIX/lib/cmake/depthbias/depthbiasConfig.cmake" ] ||
   fail "no lib/cmake/depthbias/depthbiasConfig.cmake in the installed tree"
 
-# 2. No path of the source or build tree (nor of the prefix itself) in any installed file.
-if leaks=$(grep -rlaF -e "$ROOT" -e "$BUILD" "$PREFIX"); then
+# 2. No path of the source or build tree (nor of the prefix itself) in any installed file. A
+# sanitizer build embeds its sources' paths for its reports by design: not checked there.
+if grep -q '^DEPTHBIAS_SANITIZE:BOOL=ON' "$BUILD/CMakeCache.txt" 2>/dev/null; then
+  echo "test_consumer: sanitizer build: installed files may name the sources (not checked)"
+elif leaks=$(grep -rlaF -e "$ROOT" -e "$BUILD" "$PREFIX"); then
   fail "installed files name the source or build tree: $(echo "$leaks" | tr '\n' ' ')"
 fi
 
