@@ -18,7 +18,11 @@ fail() {
 }
 BUILD=$(cd "${1:-$ROOT/build}" 2>/dev/null && pwd) || fail "no build directory ${1:-$ROOT/build}"
 APPS=$BUILD/apps
-SNAKEMAKE=$ROOT/.venv/bin/snakemake
+# The project's Python environment: the one the build was configured with (DEPTHBIAS_PYTHON in
+# its CMakeCache), else .venv/.
+PYTHON=$(sed -n 's/^DEPTHBIAS_PYTHON:[A-Z]*=//p' "$BUILD/CMakeCache.txt" 2>/dev/null || true)
+[ -x "${PYTHON:-}" ] || PYTHON=$ROOT/.venv/bin/python
+SNAKEMAKE=$(dirname "$PYTHON")/snakemake
 [ -x "$SNAKEMAKE" ] || fail "$SNAKEMAKE not found; run scripts/setup.sh"
 for tool in simulate panel_extract fit_bias; do
   [ -x "$APPS/$tool" ] || fail "$APPS/$tool not built; run scripts/build.sh"
@@ -92,7 +96,7 @@ grep -qi "nothing to be done" "$WORK/snakemake_again.log" ||
 # The cluster profile, when its executor is installed (workflow/requirements-cluster.txt): the
 # same workflow planned through it (a dry run submits nothing).
 PROFILE="not checked (snakemake-executor-plugin-slurm not in .venv)"
-if "$ROOT/.venv/bin/python" -c "import snakemake_executor_plugin_slurm" 2>/dev/null; then
+if "$PYTHON" -c "import snakemake_executor_plugin_slurm" 2>/dev/null; then
   (cd "$WORK" && "$SNAKEMAKE" -s "$ROOT/workflow/Snakefile" -n \
       --profile "$ROOT/workflow/profiles/slurm" --config units_dir="$WORK/units" \
       out_dir="$WORK/results_cluster" tools="$WORK/tools" diagnose_gap=true) \
