@@ -47,14 +47,13 @@ struct BadInput : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The default protocol, wherever the tool runs from: the working folder's config/, the installed
-// share/depthbias/config/ beside the tool, or the source tree's when built in <source>/build.
+// The default protocol, wherever the tool runs from: the working folder's config/, else
+// share/depthbias/config/ beside the tool (installed, or the build tree's link to config/).
 std::string DefaultProtocol() {
   const std::string name = "protocol_paper.yaml";
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec).parent_path();
-  for (const fs::path& dir : {fs::path("config"), exe / ".." / "share" / "depthbias" / "config",
-                              exe / ".." / ".." / "config"})
+  for (const fs::path& dir : {fs::path("config"), exe / ".." / "share" / "depthbias" / "config"})
     if (fs::exists(dir / name, ec)) return (dir / name).string();
   return (fs::path("config") / name).string();
 }

@@ -47,6 +47,11 @@ install(FILES ${PROJECT_BINARY_DIR}/depthbiasConfig.cmake
 # Snakemake workflow (share/depthbias/).
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/config/
         DESTINATION ${CMAKE_INSTALL_DATADIR}/depthbias/config COMPONENT tools)
+# The build tree mirrors that layout (build/share/depthbias/config → the source's config/), so a
+# tool finds its default files beside itself in any build folder as in an installed tree.
+file(MAKE_DIRECTORY ${PROJECT_BINARY_DIR}/share/depthbias)
+file(CREATE_LINK ${PROJECT_SOURCE_DIR}/config ${PROJECT_BINARY_DIR}/share/depthbias/config
+     SYMBOLIC)
 if(EXISTS ${PROJECT_SOURCE_DIR}/workflow)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/workflow/
           DESTINATION ${CMAKE_INSTALL_DATADIR}/depthbias/workflow COMPONENT tools
