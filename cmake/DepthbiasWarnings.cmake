@@ -25,8 +25,12 @@ function(depthbias_library name)
     set_target_properties(depthbias_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
     depthbias_warnings(depthbias_${name})
     if(DEPTHBIAS_SANITIZE)
-      # An instrumented archive needs the sanitizers' runtime wherever it is linked, consumers of
-      # the installed package included.
+      # An instrumented archive needs the sanitizers wherever it is used, consumers of the
+      # installed package included: their runtime at link time, and the same instrumentation at
+      # compile time, since headers compile differently under it (Eigen, for one, allocates
+      # through its own aligned malloc under AddressSanitizer, and an inline destructor built
+      # without it would free such a block with std::free).
+      target_compile_options(depthbias_${name} INTERFACE -fsanitize=address,undefined)
       target_link_options(depthbias_${name} INTERFACE -fsanitize=address,undefined)
     endif()
   else()
