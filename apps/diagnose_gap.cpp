@@ -3,7 +3,6 @@
 // --cases: the withheld-effect proof instead (each effect simulated at two sizes, diagnosed with
 // the base model), a Markdown table on stdout (and DIR/cases.md with --out).
 #include <glog/logging.h>
-#include <malloc.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +10,7 @@
 #include <thread>
 
 #include "args.h"
+#include "memory.h"
 #include "gap/cases.h"
 #include "gap/report.h"
 #include "io/atomic_file.h"
@@ -61,10 +61,7 @@ std::string DefaultProtocol() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // The simulator allocates a large histogram per recording: keep those blocks in the heap for
-  // reuse instead of mapping fresh zeroed pages each time (about a tenth of the run time).
-  mallopt(M_MMAP_THRESHOLD, 64 << 20);
-  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  apps::KeepLargeBlocksForReuse();  // the simulator's histograms: about a tenth of the run time
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs through glog
   io::InstallSignalCleanup();
   std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "args.h"
+#include "memory.h"
 #include "camera/presets.h"
 #include "detect/config_yaml.h"
 #include "detect/detector.h"
@@ -37,6 +38,7 @@ struct Fail : std::runtime_error {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::KeepLargeBlocksForReuse();
   std::string weights_path, light = "daylight", config_path, out, bag;
   double k = -1.0;
   try {

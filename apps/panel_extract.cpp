@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "args.h"
+#include "memory.h"
 #include "common/parallel.h"
 #include "io/atomic_file.h"
 #include "io/bag.h"
@@ -56,6 +57,7 @@ struct Job {
 }  // namespace
 
 int main(int argc, char** argv) {
+  apps::KeepLargeBlocksForReuse();
   io::PrepareRosEnvironment();
   io::InstallSignalCleanup();
   Options o;
