@@ -19,8 +19,11 @@ OUT_DIR=${OUT_DIR:-$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)}
 trap 'rm -rf "$OUT_DIR"' EXIT
 REAL=config/data/paper_d455_outdoor.csv
 
+# A command failing inside $(...) would end the script without a word under set -e: say which.
+trap 'echo "bench_diagnose_gap: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 timed() {  # prints "wall_s cpu_s"
-  /usr/bin/time -f "%e %U %S" -o "$OUT_DIR/time.txt" "$@" > /dev/null
+  /usr/bin/time -f "%e %U %S" -o "$OUT_DIR/time.txt" "$@" > /dev/null ||
+    { echo "bench_diagnose_gap: $* failed" >&2; return 1; }
   awk '{printf "%s %.2f\n", $1, $2 + $3}' "$OUT_DIR/time.txt"
 }
 best() { sort -g | head -1; }
@@ -33,7 +36,8 @@ for _ in $(seq "$REPEAT"); do
   sims+=("$(timed "$SIM" --protocol config/protocol_paper.yaml --metrics-only --frames 10 \
               --out "$OUT_DIR/m.csv")")
 done
-n_sims=$(grep -o '"simulations": [0-9]*' "$OUT_DIR/out/gap.json" | grep -o '[0-9]*$')
+n_sims=$({ grep -o '"simulations": [0-9]*' "$OUT_DIR/out/gap.json" || true; } | grep -o '[0-9]*$' ||
+  echo "?")
 wall=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f1 | best)
 cpu=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f2 | best)
 swall=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f1 | best)

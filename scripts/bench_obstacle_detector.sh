@@ -54,10 +54,13 @@ sensor.close()
 print(len(done))
 PY
 
+# A command failing inside $(...) would end the script without a word under set -e: say which.
+trap 'echo "bench_obstacle_detector: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 best() { sort -g | head -1; }
 # Wall seconds of a command pinned to one core (the whole process).
 timed() {
-  /usr/bin/time -f "%e" -o "$OUT/time.txt" taskset -c "$CORE" "$@" > "$OUT/stdout.txt"
+  /usr/bin/time -f "%e" -o "$OUT/time.txt" taskset -c "$CORE" "$@" > "$OUT/stdout.txt" ||
+    { echo "bench_obstacle_detector: $* failed" >&2; return 1; }
   cat "$OUT/time.txt"
 }
 run() { for _ in $(seq "$REPEAT"); do timed "$@"; done | best; }
@@ -65,7 +68,7 @@ run() { for _ in $(seq "$REPEAT"); do timed "$@"; done | best; }
 det_s=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" \
           --config config/obstacle_detector.yaml --out "$OUT/d.jsonl" "$BAG")
 lines=$(wc -l < "$OUT/d.jsonl")
-obst=$(grep -o '"zone"' "$OUT/d.jsonl" | wc -l)
+obst=$({ grep -o '"zone"' "$OUT/d.jsonl" || true; } | wc -l)
 read_s=$(run "$BIN/bag_info" --read-all "$BAG")
 play_s=$(run "$PY" "$OUT/playback.py" "$BAG" "$FRAMES")
 played=$(cat "$OUT/stdout.txt")

@@ -23,10 +23,13 @@ cat > "$OUT_DIR/protocol.yaml" <<YAML
 protocol: {lights: [daylight], presets: [HA], emitters: ["off"], frames: $FRAMES}
 YAML
 
+# A command failing inside $(...) would end the script without a word under set -e: say which.
+trap 'echo "bench_simulate: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 best() { sort -g | head -1; }
 # Runs a command under /usr/bin/time; prints "wall_s cpu_s" (cpu = user + system).
 timed() {
-  /usr/bin/time -f "%e %U %S" -o "$OUT_DIR/time.txt" "$@" > /dev/null
+  /usr/bin/time -f "%e %U %S" -o "$OUT_DIR/time.txt" "$@" > /dev/null ||
+    { echo "bench_simulate: $* failed" >&2; return 1; }
   awk '{printf "%s %.3f\n", $1, $2 + $3}' "$OUT_DIR/time.txt"
 }
 
