@@ -195,6 +195,18 @@ def correct(bin_dir, weights_path, metrics_path, k=2.0, name=None, columns=None)
         return values
 
 
+def add_grid_arguments(ap):
+    """--max-angle and --grid of the figures drawn over measured depth x off-axis angle."""
+    ap.add_argument("--max-angle", type=float, default=35.0)
+    ap.add_argument("--grid", type=int, nargs=2, default=(161, 71), metavar=("DEPTHS", "ANGLES"),
+                    help="grid points in depth and in angle (fewer: faster, coarser)")
+
+
+def check_grid(args):
+    if min(args.grid) < 3:
+        raise InputError(f"--grid {args.grid[0]} {args.grid[1]}: at least 3 points each")
+
+
 def linspace(lo, hi, n):
     return [lo + (hi - lo) * i / (n - 1) for i in range(n)]
 

@@ -41,12 +41,9 @@ def main():
                     help="bias [m] beyond which a reading is safety-critical")
     ap.add_argument("--depth-range", type=float, nargs=2, metavar=("MIN_M", "MAX_M"),
                     help="measured depths of the grid (default: the data's, 0.5 m wider)")
-    ap.add_argument("--max-angle", type=float, default=35.0)
-    ap.add_argument("--grid", type=int, nargs=2, default=(161, 71), metavar=("DEPTHS", "ANGLES"),
-                    help="grid points in depth and in angle (fewer: faster, coarser)")
+    pc.add_grid_arguments(ap)
     args = ap.parse_args()
-    if min(args.grid) < 3:
-        raise pc.InputError(f"--grid {args.grid[0]} {args.grid[1]}: at least 3 points each")
+    pc.check_grid(args)
     if args.threshold <= 0:
         raise pc.InputError(f"--threshold {args.threshold}: must be > 0")
 

@@ -31,12 +31,9 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--bin", default=pc.DEFAULT_BIN, help="folder of correct_depth")
     ap.add_argument("--k", type=float, default=2.0, help="safe distance = corrected - k sigma")
-    ap.add_argument("--max-angle", type=float, default=35.0)
-    ap.add_argument("--grid", type=int, nargs=2, default=(161, 71), metavar=("DEPTHS", "ANGLES"),
-                    help="grid points in depth and in angle (fewer: faster, coarser)")
+    pc.add_grid_arguments(ap)
     args = ap.parse_args()
-    if min(args.grid) < 3:
-        raise pc.InputError(f"--grid {args.grid[0]} {args.grid[1]}: at least 3 points each")
+    pc.check_grid(args)
     if args.k <= 0:
         raise pc.InputError(f"--k {args.k}: must be > 0")
     weights = pc.read_weights(args.weights)

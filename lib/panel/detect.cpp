@@ -17,9 +17,9 @@
 #include <pcl/sample_consensus/sac_model_perpendicular_plane.h>
 #include <pcl/sample_consensus/sac_model_plane.h>
 #include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
 
 #include "common/seeded_ransac.h"
-#include <pcl/segmentation/extract_clusters.h>
 
 namespace depthbias::panel {
 namespace {
