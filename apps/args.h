@@ -87,6 +87,13 @@ constexpr char kExitHelp[] =
     "  2 nothing written (usage, input or output error); 128+N ended by signal N (130 for\n"
     "  Ctrl-C, 143 for SIGTERM), its temporary files removed and no output half-written.\n";
 
+// --help: the tool's usage and the exit statuses on stdout; the status to return (kExitOk).
+inline int PrintHelp(const char* usage) {
+  std::fputs(usage, stdout);
+  std::fputs(kExitHelp, stdout);
+  return kExitOk;
+}
+
 // "32 recordings: 30 ok, 2 no_panel -> metrics.csv": rows counted by status, "ok" first;
 // `noun` is singular ("recording"), made plural when total is not 1.
 inline std::string Summary(std::size_t total, const std::string& noun,

@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) return std::cout << kUsage << apps::kExitHelp, apps::kExitOk;
+      if (args.IsHelp()) return apps::PrintHelp(kUsage);
       if (a == "--weights") weights_path = args.Value();
       else if (a == "--in") in = args.Value();
       else if (a == "--out") out = args.Value();

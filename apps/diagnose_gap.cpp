@@ -72,11 +72,7 @@ int main(int argc, char** argv) {
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) {
-        std::fputs(kUsage, stdout);
-        std::fputs(apps::kExitHelp, stdout);
-        return apps::kExitOk;
-      }
+      if (args.IsHelp()) return apps::PrintHelp(kUsage);
       if (a == "--real") real_csv = args.Value();
       else if (a == "--out") out_dir = args.Value();
       else if (a == "--protocol") protocol_file = args.Value();

@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) return std::fputs(kUsage, stdout), std::fputs(apps::kExitHelp, stdout), 0;
+      if (args.IsHelp()) return apps::PrintHelp(kUsage);
       auto value = [&] { return args.Value(); };
       constexpr double kTiny = 1e-300;
       if (a == "--in") in = value();

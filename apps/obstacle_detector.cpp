@@ -44,10 +44,7 @@ int main(int argc, char** argv) {
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) {
-        std::fputs(kUsage, stdout);
-        return 0;
-      }
+      if (args.IsHelp()) return apps::PrintHelp(kUsage);
       if (a == "--weights") weights_path = args.Value();
       else if (a == "--light") light = args.Value();
       else if (a == "--k") k = args.Number(false, 0);

@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
       else if (a == "--region-mode") o.mode = value();
       else if (a == "--jobs") o.jobs = static_cast<int>(args.Number(true, 1, 256));
       else if (a == "--quiet") o.quiet = true;
-      else if (args.IsHelp()) return std::cout << kUsage << apps::kExitHelp, apps::kExitOk;
+      else if (args.IsHelp()) return apps::PrintHelp(kUsage);
       else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
       else o.inputs.push_back(a);
     }

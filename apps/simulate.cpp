@@ -199,11 +199,7 @@ int main(int argc, char** argv) {
   try {
     for (apps::Args args(argc, argv); args.Next();) {
       const std::string& a = args.flag();
-      if (args.IsHelp()) {
-        std::fputs(kUsage, stdout);
-        std::fputs(apps::kExitHelp, stdout);
-        return apps::kExitOk;
-      }
+      if (args.IsHelp()) return apps::PrintHelp(kUsage);
       auto value = [&] { return args.Value(); };
       if (a == "--protocol") protocol_file = value();
       else if (a == "--sensor") sensor_file = value();
