@@ -1,26 +1,34 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of tests/fuzz with clang into build-fuzz/ (every library
-# instrumented, ASan + UBSan) and runs each for a time budget on a scratch copy of its committed
-# corpus tests/fuzz/corpus/<target>/ (the committed corpus is never changed; --merge adds the new
-# inputs that reach new code to it, minimized). Any crash, sanitizer report, leak, timeout
-# (> 10 s for one input) or memory blow-up (> 2 GB) is a finding: its input is kept in
-# build-fuzz/artifacts/ and the script exits 1.
+# instrumented, ASan + UBSan) and runs each on a scratch copy of its committed corpus
+# tests/fuzz/corpus/<target>/ (the committed corpus is never changed; --merge adds the new inputs
+# that reach new code to it, minimized). Any crash, sanitizer report, leak, timeout (> 10 s for
+# one input) or memory blow-up (> 2 GB) is a finding: its input is kept in build-fuzz/artifacts/
+# and the script exits 1.
 #   bash scripts/fuzz.sh [--seconds N] [--merge] [--build-only] [TARGET...]
-# Default: every target for 15 s (the ctest label fuzz runs this). Prints per target the
-# executions, the time and the findings, then "N passed, N failed".
+#   bash scripts/fuzz.sh --smoke [TARGET...]
+# Default: open-ended fuzzing, every target for N seconds (15) from a new random seed each run:
+# for finding bugs, never for a gate. --smoke is the gate (the ctest fuzz_smoke): every input of
+# the committed corpus, then a fixed number of mutations from a fixed seed, so that two runs of
+# the same code execute the same inputs and a failure is a regression, never bad luck.
+# Prints per target the executions, the time and the findings, then "N passed, N failed".
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
 SECONDS_EACH=15
+SMOKE=0
+SMOKE_SEED=20261124  # fixed: the smoke run executes the same inputs every time
+SMOKE_RUNS=30000     # mutations per target after the corpus (bag_reader: a tenth)
 MERGE=0
 BUILD_ONLY=0
 TARGETS=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) SECONDS_EACH=$2; shift 2 ;;
+    --smoke) SMOKE=1; shift ;;
     --merge) MERGE=1; shift ;;
     --build-only) BUILD_ONLY=1; shift ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) TARGETS+=("$1"); shift ;;
   esac
 done
@@ -56,7 +64,19 @@ for t in "${TARGETS[@]}"; do
   max_len=8192
   [ "$t" = bag_reader ] && max_len=65536
   log=$BUILD/fuzz_$t.log
-  "$bin" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 -max_len=$max_len \
+  if [ "$SMOKE" = 1 ]; then
+    runs_each=$SMOKE_RUNS
+    [ "$t" = bag_reader ] && runs_each=$((SMOKE_RUNS / 10))
+    how=(-seed=$SMOKE_SEED -runs=$runs_each -reload=0)
+    # Addresses reach the mutations through the compared values libFuzzer records: without
+    # address randomization the same seed gives the same inputs.
+    launch=(setarch "$(uname -m)" --addr-no-randomize)
+    "${launch[@]}" true 2>/dev/null || launch=()  # where personality() is not allowed
+  else
+    how=(-max_total_time="$SECONDS_EACH")
+    launch=()
+  fi
+  "${launch[@]}" "$bin" "${how[@]}" -timeout=10 -rss_limit_mb=2048 -max_len=$max_len \
       -print_final_stats=1 -artifact_prefix="$ART/$t-" "$scratch" "$corpus" >"$log" 2>&1
   rc=$?
   runs=$(grep -o 'stat::number_of_executed_units:[[:space:]]*[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)

@@ -196,8 +196,10 @@ CsvTable ParseCsv(const std::string& text, const std::string& file) {
 CsvTable ReadCsv(const std::string& path) { return ParseCsv(ReadFile(path), path); }
 
 std::string CsvField(const std::string& text) {
+  // Quoted when the reader would otherwise split it or trim it (spaces and tabs at either end).
+  const auto blank = [](char c) { return c == ' ' || c == '\t'; };
   const bool quote = text.find_first_of(",\"\n\r") != std::string::npos ||
-                     (!text.empty() && (text.front() == ' ' || text.back() == ' '));
+                     (!text.empty() && (blank(text.front()) || blank(text.back())));
   if (!quote) return text;
   std::string out = "\"";
   for (char c : text) {

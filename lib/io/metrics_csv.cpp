@@ -39,6 +39,12 @@ const NumberColumn kNumbers[] = {
 };
 constexpr int kArticleNumbers = 8;  // distance_m … valid_pct
 
+std::string TrimBlanks(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
 }  // namespace
 
 const std::vector<std::string>& MetricsColumns() {
@@ -73,7 +79,10 @@ std::vector<PanelMetrics> ParseMetricsCsv(const std::string& text, const std::st
     m.light = t.Cell(r, light);
     m.emitter = t.Cell(r, emitter);
     m.preset = t.Cell(r, preset);
-    if (status >= 0 && !t.Cell(r, status).empty()) m.status = t.Cell(r, status);
+    // The status decides which columns a row must have: read without the blanks a quoted cell
+    // keeps, so that "ok " is an ok row (and needs its median) like ok.
+    const std::string status_text = TrimBlanks(t.Cell(r, status));
+    if (!status_text.empty()) m.status = status_text;
     m.message = t.Cell(r, message);
     for (size_t i = 0; i < num_col.size(); ++i) {
       if (num_col[i] < 0) continue;

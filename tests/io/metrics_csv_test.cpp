@@ -1,6 +1,7 @@
 #include "io/metrics_csv.h"
 
 #include <cmath>
+#include <cstring>
 
 #include <gtest/gtest.h>
 
@@ -123,6 +124,45 @@ TEST(MetricsCsv, FailedRowsMayLackMeasurements) {
       "m.csv");
   ASSERT_EQ(rows.size(), 1u);
   EXPECT_EQ(rows[0].status, "no_panel");
+}
+
+// A header that misspells median_m, followed by an ok row: the column an ok row needs is
+// required in the header, and the refusal names the column and the file.
+TEST(MetricsCsv, HeaderMissingAColumnThatOkRowsNeedIsRefused) {
+  const std::string header =
+      "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,medain_m,plane_std_m,"
+      "hole_rate_pct,valid_pct,status\n";
+  const std::string e = ErrorOf(header + "x,d,on,HA,4,0,10,4,4,0.1,1,99,ok\n");
+  EXPECT_NE(e.find("m.csv"), std::string::npos) << e;
+  EXPECT_NE(e.find("'median_m'"), std::string::npos) << e;
+  // Whatever the rows say: a table without the column is refused even when no row is ok.
+  const std::string e2 = ErrorOf(header + "x,d,on,HA,4,0,10,4,4,0.1,1,99,no_panel\n");
+  EXPECT_NE(e2.find("'median_m'"), std::string::npos) << e2;
+}
+
+// A status read from a quoted cell keeps no blanks: "ok\t" is an ok row, so its median is
+// required, and the table reads back the same once written.
+TEST(MetricsCsv, StatusIsReadWithoutBlanks) {
+  const std::string header = std::string(kHeader12).substr(0, std::strlen(kHeader12) - 1) +
+                             ",status\n";
+  const std::string e = ErrorOf(header + "x,d,on,HA,4,0,10,4,,0.1,1,99,\"ok\t\"\n");
+  EXPECT_NE(e.find("median_m"), std::string::npos) << e;
+  const auto rows = ParseMetricsCsv(header + "x,d,on,HA,4,0,10,4,4,0.1,1,99,\" ok\t\"\n", "m.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(rows[0].status, "ok");
+}
+
+// Text cells with blanks at either end (spaces or tabs) are quoted when written, so that they
+// read back as they were (a tab used to be written bare and trimmed away on reading).
+TEST(MetricsCsv, BlanksAtTheEndsOfTextCellsRoundTrip) {
+  const auto rows = ParseMetricsCsv(
+      std::string(kHeader12) + "\"\tx\",\"d\t\",\" on\",HA,4,0,10,4,4,0.1,1,99\n", "m.csv");
+  ASSERT_EQ(rows.size(), 1u);
+  const auto back = ParseMetricsCsv(FormatMetricsCsv(rows), "back.csv");
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_EQ(back[0].bag, "\tx");
+  EXPECT_EQ(back[0].light, "d\t");
+  EXPECT_EQ(back[0].emitter, " on");
 }
 
 }  // namespace
