@@ -338,5 +338,53 @@ TEST(CorrectDepthApp, RowsThatFailedUpstreamGiveExitOne) {
                                       out.string(), dir).code, 0);
 }
 
+// One rule for the sign of the off-axis angle: the model takes the signed angle and uses |α|, so
+// a row at −20° is corrected as the row at 20° (eq. 6's tanα terms are odd: it was not).
+TEST(CorrectDepthApp, ANegativeAngleIsCorrectedAsItsMirror) {
+  const auto dir = Dir();
+  const auto w = dir / "w.yaml", out = dir / "c.csv";
+  ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + w.string() +
+                                 " --cv none --model paper6", dir).code, 0);
+  Write(dir / "signed.csv",
+        "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+        "hole_rate_pct,valid_pct\n"
+        "plus,sunset,on,HA,12,20,9,11.1,11.1,0.1,1,99\n"
+        "minus,sunset,on,HA,12,-20,9,11.1,11.1,0.1,1,99\n");
+  const AppRun r = Exec("correct_depth", "--weights " + w.string() + " --in " +
+                                             (dir / "signed.csv").string() + " --out " +
+                                             out.string(), dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const io::CsvTable t = io::ReadCsv(out.string());
+  ASSERT_EQ(t.rows.size(), 2u);
+  for (const char* c : {"corrected_m", "predictive_std_m", "margin_m"})
+    EXPECT_EQ(t.Cell(0, t.RequireColumn(c)), t.Cell(1, t.RequireColumn(c))) << c;
+}
+
+// scripts/coverage_table.sh passes fit_bias's warnings on: a table with two distances cannot be
+// cross-validated leaving a distance out, and the script says so instead of printing a table as
+// if nothing were missing.
+TEST(CoverageTableScript, ShowsFitBiasWarnings) {
+  const auto dir = Dir();
+  std::string two = "", line;
+  std::istringstream article(io::ReadFile(kArticle));
+  for (int n = 0; std::getline(article, line); ++n)
+    if (n == 0 || line.find(",4,") != std::string::npos || line.find(",8,") != std::string::npos)
+      two += line + "\n";
+  Write(dir / "two.csv", two);
+  const std::string cmd = "ARTICLE=" + (dir / "two.csv").string() +
+                          " SEEDS=0 SCHEMES=point,distance BUILD_DIR=" DEPTHBIAS_BINARY_DIR
+                          " bash " DEPTHBIAS_SOURCE_DIR "/scripts/coverage_table.sh 2";
+  const int status = std::system((cmd + " > " + (dir / "stdout").string() + " 2> " +
+                                  (dir / "stderr").string()).c_str());
+  const std::string out = io::ReadFile((dir / "stdout").string());
+  const std::string err = io::ReadFile((dir / "stderr").string());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << err;
+  EXPECT_NE(out.find("coverage of corrected - 2*sigma, held out (point)"), std::string::npos)
+      << out;
+  EXPECT_NE(err.find("fit_bias: warning: group daylight/HA: no distance cross-validation"),
+            std::string::npos) << err;
+  EXPECT_EQ(err.find(" groups from "), std::string::npos) << err;  // the routine line only
+}
+
 }  // namespace
 }  // namespace depthbias
