@@ -14,6 +14,7 @@
 #include "io/temp_files.h"
 #include "io/weights_yaml.h"
 #include "model/bias_model.h"
+#include "model/domain.h"
 
 namespace {
 
@@ -21,8 +22,9 @@ constexpr char kUsage[] =
     "usage: correct_depth --weights weights.yaml --in metrics.csv --out corrected.csv [--k 2]\n"
     "Adds per row predicted_bias_m, corrected_m, predictive_std_m, margin_m (corrected_m minus\n"
     "k predictive standard deviations: a distance the target is not nearer than) and\n"
-    "residual_m (corrected_m minus distance_m). Rows not ok, and rows whose margin is unknown\n"
-    "(a group fitted with no degree of freedom left), get empty cells. Options (default):\n"
+    "residual_m (corrected_m minus distance_m). Rows not ok (exit 1), and rows whose margin is\n"
+    "unknown (a group fitted with no degree of freedom left), get empty cells. A reading nearer\n"
+    "than 0.4 m or at 80 deg off axis or beyond is refused. Options (default):\n"
     "  --weights FILE   weights YAML of fit_bias (required)\n"
     "  --in FILE        panel-metrics CSV (required)\n"
     "  --out FILE       corrected CSV (required)\n"
@@ -75,6 +77,13 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     return Fail(weights_path + ": " + e.what());
   }
+  // A reading without physical meaning is refused before anything is computed (model/domain.h).
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (!rows[i].ok()) continue;
+    const std::string why = model::OutsideDomain(rows[i].median_m, rows[i].angle_deg);
+    if (!why.empty())
+      return Fail(in + ": row " + std::to_string(i + 1) + " ('" + rows[i].bag + "'): " + why);
+  }
   std::vector<std::string> header = io::MetricsColumns();
   for (const char* c : {"predicted_bias_m", "corrected_m", "predictive_std_m", "margin_m",
                         "residual_m"})
@@ -109,5 +118,6 @@ int main(int argc, char** argv) {
   }
   std::cout << "correct_depth: "
             << apps::Summary(rows.size(), "row", by_status, out) << "\n";
-  return apps::kExitOk;
+  // Rows that failed upstream are written with empty cells: outputs written, some rows failed.
+  return by_status.count("not ok") > 0 ? apps::kExitRowsFailed : apps::kExitOk;
 }

@@ -1,6 +1,7 @@
 #include "io/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <set>
 #include <vector>
 
 #include "io/temp_files.h"
@@ -235,6 +237,10 @@ void WriteFilesAtomic(const std::vector<std::pair<std::string, std::string>>& fi
       if (!tmp.empty()) Drop(tmp);
     throw;
   }
+  std::vector<std::string> renamed;
+  for (size_t k = 0; k < files.size(); ++k)
+    if (!targets[k].in_place) renamed.push_back(targets[k].path);
+  const OutputSetLock one_set(renamed);
   const CommitScope no_signal_now;
   size_t i = 0;
   try {
@@ -250,6 +256,29 @@ void WriteFilesAtomic(const std::vector<std::pair<std::string, std::string>>& fi
     for (const std::string& tmp : staged)
       if (!tmp.empty()) Drop(tmp);
     throw;
+  }
+}
+
+OutputSetLock::OutputSetLock(const std::vector<std::string>& paths) {
+  std::set<std::string> folders;  // a fixed order: two sets never wait on each other
+  for (const std::string& p : paths) {
+    std::error_code ec;
+    const auto canon = std::filesystem::weakly_canonical(Folder(p), ec);
+    folders.insert(ec ? Folder(p) : canon.string());
+  }
+  for (const std::string& f : folders) {
+    const int fd = ::open(f.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) continue;
+    while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+    }
+    fds_.push_back(fd);
+  }
+}
+
+OutputSetLock::~OutputSetLock() {
+  for (auto it = fds_.rbegin(); it != fds_.rend(); ++it) {
+    ::flock(*it, LOCK_UN);
+    ::close(*it);
   }
 }
 

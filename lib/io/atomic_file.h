@@ -23,10 +23,27 @@ void WriteFileAtomic(const std::string& path, const std::string& contents);
 
 // Several outputs of one run: each is written to its temporary file, and only when all are
 // written are they put in place (outputs written in place first, then the renames), so a
-// failure while writing leaves every destination as it was. (A rename failing halfway, which
+// failure while writing leaves every destination as it was. The renames of a set happen under
+// an OutputSetLock: a set is committed as one against other runs. (A rename failing halfway, which
 // takes a folder changed meanwhile, leaves the outputs renamed before it.) Signals wait for the
 // renames (temp_files.h: CommitScope).
 void WriteFilesAtomic(const std::vector<std::pair<std::string, std::string>>& files);
+
+// An exclusive lock on the folders of a set of outputs (flock on each folder, taken in a fixed
+// order, released on destruction). WriteFilesAtomic holds it while it puts a set in place, so
+// two runs writing the same outputs at once leave one run's set, never the CSV of one and the
+// JSON of the other; a reader that holds it sees a whole set. A folder that cannot be opened
+// for reading is not locked (its outputs are still each whole).
+class OutputSetLock {
+ public:
+  explicit OutputSetLock(const std::vector<std::string>& paths);
+  ~OutputSetLock();
+  OutputSetLock(const OutputSetLock&) = delete;
+  OutputSetLock& operator=(const OutputSetLock&) = delete;
+
+ private:
+  std::vector<int> fds_;
+};
 
 // Throws IoError naming the output if an output is the same file as an input, or two outputs
 // are the same path: a run never overwrites what it reads. Empty paths are ignored.

@@ -1,6 +1,7 @@
 #include "io/manifest.h"
 
 #include <cmath>
+#include <filesystem>
 
 #include "io/atomic_file.h"
 #include "io/csv.h"
@@ -8,22 +9,42 @@
 
 namespace depthbias::io {
 
+namespace {
+
+namespace fs = std::filesystem;
+
+// Absolute and normalized; links resolved as far as the path exists.
+std::string Resolved(const fs::path& p) {
+  std::error_code ec;
+  fs::path abs = fs::absolute(p, ec);
+  if (ec) abs = p;
+  const fs::path canon = fs::weakly_canonical(abs, ec);
+  return (ec ? abs.lexically_normal() : canon).string();
+}
+
+}  // namespace
+
 Manifest::Manifest(std::string file, std::vector<ManifestRow> rows,
                    std::vector<std::string> extra_columns)
     : file_(std::move(file)), rows_(std::move(rows)), extra_columns_(std::move(extra_columns)) {
   for (size_t i = 0; i < rows_.size(); ++i) {
-    const std::string name = BaseName(rows_[i].bag);
-    const auto [it, fresh] = by_name_.emplace(name, i);
+    const auto [it, fresh] = by_path_.emplace(PathOf(rows_[i]), i);
     if (!fresh) {
-      throw IoError(file_ + ":" + std::to_string(rows_[i].line) + ": bag '" + name +
-                    "' already listed on line " + std::to_string(rows_[it->second].line));
+      throw IoError(file_ + ":" + std::to_string(rows_[i].line) + ": bag '" + rows_[i].bag +
+                    "' already listed on line " + std::to_string(rows_[it->second].line) +
+                    " (as '" + rows_[it->second].bag + "')");
     }
   }
 }
 
+std::string Manifest::PathOf(const ManifestRow& row) const {
+  const fs::path bag(row.bag);
+  return Resolved(bag.is_absolute() ? bag : fs::path(file_).parent_path() / bag);
+}
+
 const ManifestRow* Manifest::Find(const std::string& bag_path) const {
-  const auto it = by_name_.find(BaseName(bag_path));
-  return it == by_name_.end() ? nullptr : &rows_[it->second];
+  const auto it = by_path_.find(Resolved(bag_path));
+  return it == by_path_.end() ? nullptr : &rows_[it->second];
 }
 
 Manifest ParseManifest(const std::string& text, const std::string& file) {

@@ -29,8 +29,14 @@ class Manifest {
   Manifest(std::string file, std::vector<ManifestRow> rows,
            std::vector<std::string> extra_columns);
 
-  // Row for a bag, matched by file name (folders ignored on both sides); nullptr if none.
+  // Row for a recording, matched by path: a row's `bag` is a path relative to the manifest's
+  // own folder (or absolute), `bag_path` a path as the user gave it (relative to the working
+  // folder); both name the same file once made absolute and normalized (links resolved where
+  // they exist). A file of the same name elsewhere (/etc/a.bag for a row `a.bag`) is not
+  // matched. nullptr if none.
   const ManifestRow* Find(const std::string& bag_path) const;
+  // The file a row names: its `bag` resolved against the manifest's folder.
+  std::string PathOf(const ManifestRow& row) const;
   const std::vector<ManifestRow>& rows() const { return rows_; }
   const std::vector<std::string>& extra_columns() const { return extra_columns_; }
   const std::string& file() const { return file_; }
@@ -39,11 +45,12 @@ class Manifest {
   std::string file_;
   std::vector<ManifestRow> rows_;
   std::vector<std::string> extra_columns_;  // in file order
-  std::map<std::string, size_t> by_name_;
+  std::map<std::string, size_t> by_path_;  // resolved path → row
 };
 
 // Throws IoError naming file and line on a missing column, a bad number (distance_m must be
-// > 0, angle_deg a number), an empty bag or light, or two rows for the same bag file name.
+// > 0, angle_deg a number), an empty bag or light, or two rows for the same recording (the
+// same path once resolved against the manifest's folder).
 Manifest ParseManifest(const std::string& text, const std::string& file);
 Manifest ReadManifest(const std::string& path);
 

@@ -45,6 +45,11 @@ constexpr double kInf = HUGE_VAL;
 constexpr NumberRule kDistanceM{0.0, 1000.0, true, false, "m"};
 // Off-axis angles: tan α must be finite.
 constexpr NumberRule kAngleDeg{-90.0, 90.0, true, true, "deg"};
+// Off-axis angles a bias model may be evaluated at (model/domain.h): at 80° tan α ≈ 5.7
+// multiplies every angle term beyond anything a fit has seen.
+constexpr NumberRule kOffAxisDeg{-80.0, 80.0, true, true, "deg"};
+// A standard deviation whose square (a variance) is still a finite number [m].
+constexpr NumberRule kSigmaM{0.0, 1e150, false, false, "m"};
 // Directions of a point in front of the camera.
 constexpr NumberRule kDirectionDeg{-180.0, 180.0, false, false, "deg"};
 constexpr NumberRule kTiltDeg{0.0, 180.0, false, false, "deg"};

@@ -95,7 +95,10 @@ class Reader {
   }
   records::BiasCrossValidation Cv(const YAML::Node& n, const std::string& path) const {
     if (!n.IsMap()) Fail(path, "expected a map {scheme, rmse_m, mae_m}");
-    return {String(Need(n, "scheme", path + ".scheme"), path + ".scheme"),
+    const std::string scheme = String(Need(n, "scheme", path + ".scheme"), path + ".scheme");
+    if (scheme != "none" && scheme != "point" && scheme != "distance" && scheme != "angle")
+      Fail(path + ".scheme", "'" + scheme + "' (expected point, distance, angle or none)");
+    return {scheme,
             Checked(Need(n, "rmse_m", path + ".rmse_m"), path + ".rmse_m", rules::kSpreadM, true),
             Checked(Need(n, "mae_m", path + ".mae_m"), path + ".mae_m", rules::kSpreadM, true)};
   }
@@ -182,7 +185,8 @@ std::string FormatWeightsYaml(const records::BiasWeights& w) {
       out << YAML::Key << "margin" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
           << "placement_m" << YAML::Value << Num(g.margin.placement_m) << YAML::Key
           << "noise_per_m" << YAML::Value << Num(g.margin.noise_per_m) << YAML::Key
-          << "weighted" << YAML::Value << g.margin.weighted << YAML::EndMap;
+          << "weighted" << YAML::Value << g.margin.weighted << YAML::Key << "errors"
+          << YAML::Value << g.margin.errors << YAML::EndMap;
     }
     auto cv_map = [&out](const records::BiasCrossValidation& cv) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "scheme" << YAML::Value << cv.scheme
@@ -300,7 +304,7 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
     if (gn["knots_deg"]) {
       g.knots_deg = r.Doubles(gn["knots_deg"], p + ".knots_deg");
       for (size_t k = 0; k < g.knots_deg.size(); ++k) {
-        const std::string why = rules::kAngleDeg.Why(g.knots_deg[k]);
+        const std::string why = rules::kOffAxisDeg.Why(g.knots_deg[k]);
         if (!why.empty()) r.Fail(p + ".knots_deg[" + std::to_string(k) + "]", why);
       }
     }
@@ -310,20 +314,31 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
     // model then claims no margin. A negative or infinite scatter is refused.
     if (gn["residual_std_m"]) {
       g.residual_std_m =
-          r.Checked(gn["residual_std_m"], p + ".residual_std_m", rules::kSpreadM, true);
+          r.Checked(gn["residual_std_m"], p + ".residual_std_m", rules::kSigmaM, true);
     }
     if (const YAML::Node mn = gn["margin"]; mn) {
       const std::string mp = p + ".margin";
       if (!mn.IsMap()) r.Fail(mp, "expected a map {placement_m, noise_per_m, weighted}");
-      r.OnlyKeys(mn, mp, {"placement_m", "noise_per_m", "weighted"});
+      r.OnlyKeys(mn, mp, {"placement_m", "noise_per_m", "weighted", "errors"});
       g.margin.known = true;
-      g.margin.placement_m = r.Double(r.Need(mn, "placement_m", mp + ".placement_m"),
-                                      mp + ".placement_m");
-      g.margin.noise_per_m = r.Double(r.Need(mn, "noise_per_m", mp + ".noise_per_m"),
-                                      mp + ".noise_per_m");
+      g.margin.placement_m = r.Checked(r.Need(mn, "placement_m", mp + ".placement_m"),
+                                       mp + ".placement_m", rules::kSigmaM);
+      g.margin.noise_per_m = r.Checked(r.Need(mn, "noise_per_m", mp + ".noise_per_m"),
+                                       mp + ".noise_per_m", rules::kSigmaM);
       if (mn["weighted"]) g.margin.weighted = r.Bool(mn["weighted"], mp + ".weighted");
-      if (!(g.margin.placement_m >= 0) || !(g.margin.noise_per_m >= 0)) {
-        r.Fail(mp, "placement_m and noise_per_m must be finite and >= 0");
+      if (mn["errors"]) {
+        g.margin.errors = r.String(mn["errors"], mp + ".errors");
+        if (g.margin.errors != "held_out" && g.margin.errors != "in_sample")
+          r.Fail(mp + ".errors", "'" + g.margin.errors + "' (expected held_out or in_sample)");
+      }
+      // σ²(Z) = σ_place² + (c·Z²)² must stay a finite number out to the farthest depth any
+      // reader accepts (rules::kDistanceM), or a margin comes out as ±inf.
+      const double far_m = rules::kDistanceM.max;
+      const double noise_m = g.margin.noise_per_m * far_m * far_m;
+      if (!std::isfinite(g.margin.placement_m * g.margin.placement_m + noise_m * noise_m)) {
+        r.Fail(mp, "placement_m " + records::NumberText(g.margin.placement_m) +
+                       " and noise_per_m " + records::NumberText(g.margin.noise_per_m) +
+                       " give a sigma that overflows at " + records::NumberText(far_m) + " m");
       }
     }
     if (gn["cv"]) {

@@ -8,8 +8,10 @@
 //   near_guard: {near_m: 5, full_m: 7}        noise_pooled: true
 //   groups:
 //     - {light, preset, [emitter], n, weights: {name: value, ...}, [knots_deg: [...]],
-//        rmse_m, mae_m, residual_std_m, [margin: {placement_m, noise_per_m, weighted}],
-//        cv: {scheme, rmse_m, mae_m}, [cv_more: [...]], covariance: [[...], ...]}
+//        rmse_m, mae_m, residual_std_m,
+//        [margin: {placement_m, noise_per_m, weighted, [errors: held_out|in_sample]}],
+//        cv: {scheme: point|distance|angle|none, rmse_m, mae_m}, [cv_more: [...]],
+//        covariance: [[...], ...]}
 //   provenance: {input_file, input_sha256, tool, tool_version}
 //
 // Schema depthbias.weights/1 (before margins: no near_guard, noise_pooled, margin) is still
@@ -26,8 +28,9 @@ namespace depthbias::io {
 std::string FormatWeightsYaml(const records::BiasWeights& weights);
 void WriteWeightsYaml(const std::string& path, const records::BiasWeights& weights);
 
-// Throws IoError naming the file and the key for a YAML of another schema, a missing key or a
-// value of the wrong type.
+// Throws IoError naming the file and the key for a YAML of another schema, a missing key, a
+// value of the wrong type, or one without physical meaning (ranges.h: a knot at 80° or beyond,
+// a σ term whose square overflows).
 records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string& file);
 records::BiasWeights ReadWeightsYaml(const std::string& path);
 

@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "model/domain.h"
 #include "model/fit.h"
 #include "records/number_text.h"
 
@@ -13,7 +14,16 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-Features At(double depth_m, double angle_deg) { return {depth_m, angle_deg * kDegToRad}; }
+// The model is even in α: a reading at −20° is corrected as one at 20°.
+Features At(double depth_m, double angle_deg) {
+  return {depth_m, std::abs(angle_deg) * kDegToRad};
+}
+
+// A parameter that is a depth scale (true depth over nominal: k of disp_scale, k0 of disp_tan,
+// every knot of disp_knots): zero or negative has no physical meaning.
+bool IsScale(const ParamSpec& p) {
+  return p.unit == "1" && p.prior_mean == 1.0;
+}
 
 bool Matches(const std::string& key, const std::string& value) {
   return key == "*" || value == "*" || key == value;
@@ -87,11 +97,64 @@ ScenarioModel::ScenarioModel(const records::BiasWeightsGroup& group,
                                   "variance would shrink the margin)");
     }
   }
+  CheckPhysical(label);
+}
+
+void ScenarioModel::CheckPhysical(const std::string& label) const {
+  const auto& params = form_->params();
+  for (size_t j = 0; j < params.size(); ++j) {
+    if (IsScale(params[j]) && !(group_.values[j] > 0.0)) {
+      throw std::invalid_argument("group " + label + ": weight '" + params[j].name + "' is " +
+                                  records::NumberText(group_.values[j]) +
+                                  ": a depth scale must be > 0");
+    }
+  }
+  for (double knot : group_.knots_deg) {
+    if (!(std::abs(knot) < kMaxAngleDeg)) {
+      throw std::invalid_argument("group " + label + ": knot " + records::NumberText(knot) +
+                                  " deg is at or beyond " + records::NumberText(kMaxAngleDeg) +
+                                  " deg off axis");
+    }
+  }
+  if (residual_.known) {
+    const double far2 = residual_.VarianceM2(kCheckMaxDepthM);
+    if (!std::isfinite(residual_.placement_m) || !std::isfinite(residual_.noise_per_m) ||
+        residual_.placement_m < 0 || residual_.noise_per_m < 0 || !std::isfinite(far2)) {
+      throw std::invalid_argument(
+          "group " + label + ": margin placement_m " +
+          records::NumberText(residual_.placement_m) + ", noise_per_m " +
+          records::NumberText(residual_.noise_per_m) + ": sigma at " +
+          records::NumberText(kCheckMaxDepthM) + " m is not a finite distance");
+    }
+  }
+  // Over the readings a D455 gives, the correction and its σ must be finite numbers: a scale
+  // that crosses zero off axis, a disparity offset that puts a reading beyond infinity, or σ
+  // terms whose squares overflow are refused here, not written out as ±inf.
+  for (double angle = 0.0; angle <= kCheckMaxAngleDeg + 1e-9; angle += 5.0) {
+    const double scale = form_->Scale(group_.values.data(), angle * kDegToRad);
+    if (!std::isnan(scale) && !(scale > 0.0)) {
+      throw std::invalid_argument("group " + label + ": the depth scale at " +
+                                  records::NumberText(angle) + " deg off axis is " +
+                                  records::NumberText(scale) + ": a depth scale must be > 0");
+    }
+    for (double z = kMinDepthM; z <= kCheckMaxDepthM * 1.0001; z *= 1.25) {
+      const double b = form_->Bias(group_.values.data(), At(z, angle));
+      const double s = PredictiveStdM(z, angle);
+      const bool nan_std = std::isnan(s) && std::isnan(group_.residual_std_m) && !residual_.known;
+      if (!std::isfinite(b) || (!std::isfinite(s) && !nan_std)) {
+        throw std::invalid_argument(
+            "group " + label + ": at depth " + records::NumberText(z) + " m and " +
+            records::NumberText(angle) + " deg the weights give a bias of " +
+            records::NumberText(b) + " m and a sigma of " + records::NumberText(s) +
+            " m: not finite numbers");
+      }
+    }
+  }
 }
 
 double ScenarioModel::FittedBiasM(double depth_m, double angle_deg) const {
-  // Outside the model's domain (no depth, or tan α infinite) there is no prediction.
-  if (!(depth_m > 0) || !std::isfinite(depth_m) || !(std::abs(angle_deg) < 90.0)) return NAN;
+  // Outside the model's domain (domain.h) there is no prediction.
+  if (!OutsideDomain(depth_m, angle_deg).empty()) return NAN;
   return form_->Bias(group_.values.data(), At(depth_m, angle_deg));
 }
 
@@ -114,6 +177,7 @@ bool ScenarioModel::NearGuarded(double depth_m, double angle_deg) const {
 }
 
 double ScenarioModel::PredictiveStdM(double depth_m, double angle_deg) const {
+  if (!OutsideDomain(depth_m, angle_deg).empty()) return NAN;
   double share = 1.0;
   GuardedBias(FittedBiasM(depth_m, angle_deg), At(depth_m, angle_deg), guard_, &share);
   double s2 = 0.0;

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "records/bias_weights.h"
+#include "model/domain.h"
 #include "model/forms.h"
 #include "model/margin.h"
 
@@ -19,10 +20,15 @@ namespace depthbias::model {
 class ScenarioModel {
  public:
   // Throws std::invalid_argument when the group does not match the form (names, sizes,
-  // covariance shape).
+  // covariance shape) or has no physical meaning (domain.h): a depth scale <= 0, a knot at or
+  // beyond kMaxAngleDeg, σ terms or a correction that are not finite over the readings a D455
+  // gives (depths kMinDepthM…kCheckMaxDepthM, angles 0…kCheckMaxAngleDeg).
   ScenarioModel(const records::BiasWeightsGroup& group, const FormConstants& constants,
                 const std::string& model, const NearGuard& guard = {});
 
+  // Every reading takes the signed off-axis angle α [deg] and uses |α| (the model is even in α).
+  // Outside the domain (OutsideDomain: Z < kMinDepthM, |α| >= kMaxAngleDeg) the answers are NaN.
+  //
   // b(Z, α) = measured − nominal distance [m] as reported: the fitted bias, except where the
   // near guard holds back a correction that would move a near reading farther.
   double BiasM(double depth_m, double angle_deg) const;
@@ -56,6 +62,7 @@ class ScenarioModel {
 
  private:
   double FittedBiasM(double depth_m, double angle_deg) const;
+  void CheckPhysical(const std::string& label) const;  // throws std::invalid_argument
   records::BiasWeightsGroup group_;
   std::shared_ptr<const Form> form_;
   Eigen::MatrixXd covariance_;  // empty if unknown

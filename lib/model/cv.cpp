@@ -34,6 +34,7 @@ bool ParseCvScheme(const std::string& text, CvScheme* scheme) {
   if (text == "none") *scheme = CvScheme::kNone;
   else if (text == "point") *scheme = CvScheme::kPoint;
   else if (text == "distance") *scheme = CvScheme::kDistance;
+  else if (text == "angle") *scheme = CvScheme::kAngle;
   else return false;
   return true;
 }
@@ -42,6 +43,7 @@ std::string CvSchemeName(CvScheme scheme) {
   switch (scheme) {
     case CvScheme::kPoint: return "point";
     case CvScheme::kDistance: return "distance";
+    case CvScheme::kAngle: return "angle";
     default: return "none";
   }
 }
@@ -49,8 +51,8 @@ std::string CvSchemeName(CvScheme scheme) {
 std::vector<int> FoldIds(const std::vector<Sample>& samples, CvScheme scheme) {
   std::map<std::pair<long long, long long>, int> keys;
   auto key = [scheme](const Sample& s) {
-    const long long d = std::llround(s.distance_m * 1e6);
-    const long long a = scheme == CvScheme::kPoint ? std::llround(s.angle_deg * 1e6) : 0;
+    const long long d = scheme == CvScheme::kAngle ? 0 : std::llround(s.distance_m * 1e6);
+    const long long a = scheme == CvScheme::kDistance ? 0 : std::llround(s.angle_deg * 1e6);
     return std::make_pair(d, a);
   };
   for (const auto& s : samples) keys.emplace(key(s), 0);

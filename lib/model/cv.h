@@ -2,7 +2,10 @@
 // Cross-validation of a bias fit on one group's samples:
 //  - point: leave one test point out; a test point is a (distance, angle) pair, so the
 //    emitter-on and emitter-off rows of a point leave together;
-//  - distance: leave one distance out (every row at that distance).
+//  - distance: leave one distance out (every row at that distance);
+//  - angle: leave one off-axis angle out (every row at that angle): a per-placement error that a
+//    per-angle parameter absorbs in-sample shows up here, and a margin must hold for an angle it
+//    has not seen.
 // Each fold refits with the same parameters on the rest and predicts the held-out rows.
 
 #include <string>
@@ -12,7 +15,7 @@
 
 namespace depthbias::model {
 
-enum class CvScheme { kNone, kPoint, kDistance };
+enum class CvScheme { kNone, kPoint, kDistance, kAngle };
 bool ParseCvScheme(const std::string& text, CvScheme* scheme);
 std::string CvSchemeName(CvScheme scheme);
 
@@ -28,6 +31,7 @@ struct CvResult {
   double mae_m = 0.0;
   std::vector<double> errors_m;  // predicted − target, per sample (held out)
   std::vector<double> std_m;     // held-out predictive σ per sample
+  std::vector<int> chosen;       // candidate chosen in each fold, when the fit is a choice
 };
 
 CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& params,

@@ -38,9 +38,11 @@ struct PriorOverride {
 struct MarginParams {
   bool enabled = true;
   // Weighting of the bias fit by 1/σ²(Z): kAuto weights the disparity-space forms and leaves
-  // paper6 unweighted (the article's ridge, Table 6).
+  // paper6 unweighted (the article's ridge, Table 6). Off by default: the point fit is judged
+  // by its error in metres (select.h), σ is a layer of its own, fitted to the point fit's
+  // held-out errors; weighting by 1/σ² lost held-out RMSE at long range.
   enum class Weighting { kAuto, kOn, kOff };
-  Weighting weighting = Weighting::kAuto;
+  Weighting weighting = Weighting::kOff;
   int rounds = 3;  // fit ↔ residual model alternations
   ResidualFitParams residual;
   // Below a measured range of 5 m a correction that would push a reading farther is not
@@ -93,6 +95,10 @@ struct FitResult {
   ResidualModel residual_model;
   NearGuard guard;
   bool margin_weighted = false;
+  // True when the residual model was fitted to in-sample residuals because a test point could
+  // not be left out (margin_note says which and why): a weaker margin, said in the weights.
+  bool margin_in_sample = false;
+  std::string margin_note;
 };
 
 // Checks the design against the form before fitting: n ≥ number of parameters, enough

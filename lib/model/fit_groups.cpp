@@ -6,13 +6,18 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <memory>
 
+#include "model/domain.h"
 #include "model/margin_fit.h"
+#include "model/select.h"
 
 namespace depthbias::model {
 
 bool FitGroupsParams::IsValid(std::string* why) const {
   if (!fit.IsValid(why)) return false;
+  for (const auto& c : select)
+    if (!c.IsValid(why)) return false;
   for (const auto& k : group_by) {
     if (k != "light" && k != "preset" && k != "emitter") {
       if (why) *why = "unknown grouping key '" + k + "' (known: light, preset, emitter)";
@@ -37,6 +42,14 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
                        "empty): measure it with a manifest";
       return report;
     }
+    if (UsableForFit(r)) {
+      // A reading without physical meaning is refused, never fitted (domain.h).
+      const std::string outside = OutsideDomain(r.median_m, r.angle_deg);
+      if (!outside.empty()) {
+        report.message = "bag '" + r.bag + "': " + outside;
+        return report;
+      }
+    }
     (UsableForFit(r) ? report.rows_used : report.rows_skipped)++;
   }
   if (report.rows_used == 0) {
@@ -48,12 +61,28 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
   for (const auto& g : groups) {
     samples.push_back(MakeSamples(rows, g.rows, params.fit.weight_by_valid_pixels));
   }
+  // The point fit: given, or chosen by pooled held-out RMSE in metres (select.h).
+  report.fitted = params.fit;
+  std::unique_ptr<Selector> selector;
+  if (!params.select.empty()) {
+    selector = std::make_unique<Selector>(samples, params.select);
+    const int c = selector->Choose(-1, nullptr, &why);
+    if (c < 0) {
+      report.message = why;
+      return report;
+    }
+    report.chosen = c;
+    report.fitted = params.select[static_cast<size_t>(c)];
+    report.candidate_rmse_m = selector->PooledRmse();
+    for (size_t i = 0; i < params.select.size(); ++i)
+      report.candidate_labels.push_back(selector->Label(static_cast<int>(i)));
+  }
   // Every scenario fitted with its margin, together (one camera: the noise term may be pooled).
-  const JointFitResult joint = FitWithMargins(samples, params.fit);
+  const JointFitResult joint = FitWithMargins(samples, report.fitted);
   if (!joint.success) {
     // Name the scenario that failed.
     for (size_t k = 0; k < groups.size(); ++k) {
-      const FitResult f = Fit(samples[k], params.fit);
+      const FitResult f = Fit(samples[k], report.fitted);
       if (!f.success) {
         report.message = "group " + groups[k].Label() + ": " + f.message;
         return report;
@@ -61,6 +90,23 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
     }
     report.message = joint.message;
     return report;
+  }
+  // The scenarios' held-out errors under each candidate (for the pooled noise term of a fold
+  // that chose it), computed once.
+  std::map<int, std::vector<ResidualData>> errors_of;
+  errors_of[report.chosen] = joint.errors;
+  auto ErrorsOf = [&](int c) -> const std::vector<ResidualData>& {
+    auto it = errors_of.find(c);
+    if (it == errors_of.end()) {
+      const JointFitResult j = FitWithMargins(samples, params.select[static_cast<size_t>(c)]);
+      it = errors_of.emplace(c, j.success ? j.errors : std::vector<ResidualData>{}).first;
+    }
+    return it->second;
+  };
+  for (size_t k = 0; k < groups.size(); ++k) {
+    if (joint.fits[k].margin_in_sample) {
+      report.warnings.push_back("group " + groups[k].Label() + ": " + joint.fits[k].margin_note);
+    }
   }
   for (size_t k = 0; k < groups.size(); ++k) {
     const Group& g = groups[k];
@@ -74,9 +120,22 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
       if (o != k) others.push_back(joint.errors[o]);
     for (CvScheme s : params.cv) {
       if (s == CvScheme::kNone) continue;
-      gr.cv.push_back(params.fit.margins.enabled
-                          ? CrossValidateWithMargins(samples[k], params.fit, s, others)
-                          : CrossValidate(samples[k], params.fit, s));
+      if (selector) {
+        // The choice is made again in every fold: the other scenarios' residual data as the
+        // candidate chosen there gives them.
+        auto fixed_for = [&](int c) {
+          std::vector<ResidualData> out;
+          const auto& errors = ErrorsOf(c);
+          for (size_t o = 0; o < errors.size(); ++o)
+            if (o != k) out.push_back(errors[o]);
+          return out;
+        };
+        gr.cv.push_back(CrossValidateSelected(selector.get(), static_cast<int>(k), s, fixed_for));
+      } else {
+        gr.cv.push_back(params.fit.margins.enabled
+                            ? CrossValidateWithMargins(samples[k], params.fit, s, others)
+                            : CrossValidate(samples[k], params.fit, s));
+      }
       if (!gr.cv.back().success) {
         gr.cv.back().rmse_m = gr.cv.back().mae_m = std::numeric_limits<double>::quiet_NaN();
         report.warnings.push_back("group " + g.Label() + ": no " + CvSchemeName(s) +
@@ -120,9 +179,9 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
   char buf[256];
   std::snprintf(buf, sizeof(buf),
                 "model %s  loss %s (scale %g m)  lambda %g  rows %d used, %d skipped  %.3f s\n",
-                params.fit.model.c_str(),
-                LossName(ResolveLoss(params.fit.loss, params.fit.model)).c_str(),
-                params.fit.loss_scale_m, params.fit.lambda, report.rows_used,
+                report.fitted.model.c_str(),
+                LossName(ResolveLoss(report.fitted.loss, report.fitted.model)).c_str(),
+                report.fitted.loss_scale_m, report.fitted.lambda, report.rows_used,
                 report.rows_skipped, report.seconds);
   out += buf;
   std::snprintf(buf, sizeof(buf), "%-20s %3s %8s %8s", "group", "n", "rmse_m", "mae_m");
@@ -157,6 +216,31 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
       out += buf;
     }
     out += "\n";
+  }
+  if (report.chosen >= 0) {
+    out += "point fit chosen by pooled held-out RMSE (leave a test point out):";
+    for (size_t c = 0; c < report.candidate_labels.size(); ++c) {
+      std::snprintf(buf, sizeof(buf), " %s%s %.3f", static_cast<int>(c) == report.chosen ? "*" : "",
+                    report.candidate_labels[c].c_str(), report.candidate_rmse_m[c]);
+      out += buf;
+    }
+    out += "\nchosen again in every fold (scheme: candidate: folds):\n";
+    for (const auto& g : report.groups) {
+      out += "  " + g.group.Label() + ":";
+      for (const auto& cv : g.cv) {
+        std::map<int, int> count;
+        for (int c : cv.chosen) ++count[c];
+        out += " " + CvSchemeName(cv.scheme) + "(";
+        bool first = true;
+        for (const auto& [c, k] : count) {
+          out += (first ? "" : " ") + report.candidate_labels[static_cast<size_t>(c)] + ":" +
+                 std::to_string(k);
+          first = false;
+        }
+        out += ")";
+      }
+      out += "\n";
+    }
   }
   if (!params.nested_candidates.empty()) {
     out += "nested choice (candidate: outer folds that chose it):\n";
@@ -193,13 +277,13 @@ double BinomialUpperTail(int n, int m, double p) {
 
 }  // namespace
 
-std::vector<CoverageRow> Coverage(const FitReport& report, double k) {
+std::vector<CoverageRow> Coverage(const FitReport& report, double k, size_t scheme) {
   std::map<long long, CoverageRow> rows;
   const size_t groups = report.groups.size();
   for (size_t g = 0; g < groups; ++g) {
     const GroupReport& gr = report.groups[g];
-    if (gr.cv.empty() || !gr.cv.front().success) continue;
-    const CvResult& cv = gr.cv.front();
+    if (gr.cv.size() <= scheme || !gr.cv[scheme].success) continue;
+    const CvResult& cv = gr.cv[scheme];
     const auto& samples = gr.samples;
     for (size_t i = 0; i < samples.size() && i < cv.errors_m.size(); ++i) {
       CoverageRow& row = rows[std::llround(samples[i].distance_m * 1e6)];
@@ -237,12 +321,18 @@ std::vector<CoverageRow> Coverage(const FitReport& report, double k) {
 }
 
 std::string FormatCoverageTable(const FitReport& report, double k) {
+  std::string out;
+  const size_t schemes = report.groups.empty() ? 0 : report.groups[0].cv.size();
+  for (size_t s = 0; s < schemes; ++s) out += FormatCoverageTable(report, k, s);
+  if (schemes == 0) out = "coverage: no cross-validation was run\n";
+  return out;
+}
+
+std::string FormatCoverageTable(const FitReport& report, double k, size_t scheme) {
   char buf[256];
   std::snprintf(buf, sizeof(buf),
                 "coverage of corrected - %g*sigma, held out (%s): share of truths beyond it\n",
-                k, report.groups.empty() || report.groups[0].cv.empty()
-                       ? "none"
-                       : CvSchemeName(report.groups[0].cv.front().scheme).c_str());
+                k, CvSchemeName(report.groups[0].cv[scheme].scheme).c_str());
   std::string out = buf;
   std::snprintf(buf, sizeof(buf), "%10s %4s %8s %7s %9s %12s %10s %6s", "distance_m", "n",
                 "beyond", "share", "p_promise", "mean_err_m", "mean_std_m", "rms_z");
@@ -252,7 +342,7 @@ std::string FormatCoverageTable(const FitReport& report, double k) {
     out += buf;
   }
   out += "\n";
-  for (const CoverageRow& r : Coverage(report, k)) {
+  for (const CoverageRow& r : Coverage(report, k, scheme)) {
     std::snprintf(buf, sizeof(buf), "%10g %4d %8d %6.1f%% %9.2f %+12.3f %10.3f %6.2f",
                   r.distance_m, r.n, r.beyond, 100.0 * r.beyond / std::max(1, r.n), r.promise_p,
                   r.mean_error_m, r.mean_std_m, r.rms_z);
@@ -275,12 +365,13 @@ std::string FormatCoverageTable(const FitReport& report, double k) {
 
 records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params) {
   records::BiasWeights w;
-  w.model = params.fit.model;
-  w.lambda = params.fit.lambda;
-  w.loss = LossName(ResolveLoss(params.fit.loss, params.fit.model));
-  w.loss_scale_m = params.fit.loss_scale_m;
-  w.focal_px = params.fit.focal_px;
-  w.baseline_m = params.fit.baseline_m;
+  const FitParams& fit = report.fitted;
+  w.model = fit.model;
+  w.lambda = fit.lambda;
+  w.loss = LossName(ResolveLoss(fit.loss, fit.model));
+  w.loss_scale_m = fit.loss_scale_m;
+  w.focal_px = fit.focal_px;
+  w.baseline_m = fit.baseline_m;
   w.group_by = params.group_by;
   if (params.fit.margins.enabled) {
     w.near_m = params.fit.margins.guard.near_m;
@@ -305,6 +396,7 @@ records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& p
       g.margin.placement_m = gr.fit.residual_model.placement_m;
       g.margin.noise_per_m = gr.fit.residual_model.noise_per_m;
       g.margin.weighted = gr.fit.margin_weighted;
+      g.margin.errors = gr.fit.margin_in_sample ? "in_sample" : "held_out";
     }
     if (gr.fit.covariance_ok) {
       const auto& c = gr.fit.covariance;

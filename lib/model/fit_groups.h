@@ -16,11 +16,16 @@ namespace depthbias::model {
 struct FitGroupsParams {
   FitParams fit;
   std::vector<std::string> group_by = {"light", "preset"};  // DESIGN.md: per (light, preset)
-  std::vector<CvScheme> cv = {CvScheme::kPoint, CvScheme::kDistance};  // first = primary
+  // First = primary. Leaving an angle out checks what a per-angle parameter hides in-sample.
+  std::vector<CvScheme> cv = {CvScheme::kPoint, CvScheme::kDistance, CvScheme::kAngle};
   // When not empty: also estimate, with the primary scheme, the held-out error of choosing
   // among these candidates by inner cross-validation (NestedCrossValidate), so that the choice
   // of a model is itself judged out of sample.
   std::vector<FitParams> nested_candidates;
+  // When not empty, the point fit is chosen among these (select.h: pooled held-out RMSE in
+  // metres, leave one test point out) and fit.model is not used; every cross-validation then
+  // makes the choice again inside each fold.
+  std::vector<FitParams> select;
 
   bool IsValid(std::string* why) const;
 };
@@ -39,6 +44,10 @@ struct FitReport {
   std::string message;       // the first group that failed and why
   std::vector<std::string> warnings;  // cross-validations that could not run (fit still done)
   std::vector<GroupReport> groups;
+  FitParams fitted;          // the point fit's parameters (the candidate chosen, if any)
+  int chosen = -1;           // index into FitGroupsParams::select, when a choice was made
+  std::vector<std::string> candidate_labels;  // "form/loss" of every candidate
+  std::vector<double> candidate_rmse_m;       // its pooled held-out RMSE (leave a point out)
   int rows_used = 0;
   int rows_skipped = 0;      // rows whose status is not "ok" (failed measurements)
   double seconds = 0.0;      // wall time of fits and cross-validation
@@ -57,9 +66,9 @@ std::vector<FitParams> DefaultCandidates(const FitParams& base);
 std::string FormatFitTable(const FitReport& report, const FitGroupsParams& params);
 
 // Coverage of the safe distance out of sample, per nominal distance: the share of held-out rows
-// whose truth lies below corrected − k·σ (the dangerous side), from the first scheme's
+// whose truth lies below corrected − k·σ (the dangerous side), from one scheme's
 // cross-validation (CrossValidateWithMargins: each row predicted by a fit that did not see its
-// test point). With a normal error, k = 2 promises at most 2.3 % beyond.
+// test point, its distance or its angle). With a normal error, k = 2 promises at most 2.3 % beyond.
 struct CoverageRow {
   double distance_m = 0.0;
   int n = 0;                        // rows, every group
@@ -73,8 +82,11 @@ struct CoverageRow {
   std::vector<int> group_n, group_beyond;  // per group, in report order
   std::vector<double> group_mean_error_m;
 };
-std::vector<CoverageRow> Coverage(const FitReport& report, double k);
+// `scheme` indexes the cross-validations run (FitGroupsParams::cv without kNone; 0 = primary).
+std::vector<CoverageRow> Coverage(const FitReport& report, double k, size_t scheme = 0);
+// One table per cross-validation run, each headed by its scheme.
 std::string FormatCoverageTable(const FitReport& report, double k);
+std::string FormatCoverageTable(const FitReport& report, double k, size_t scheme);
 
 // The weights record of a successful report (provenance left empty for the caller).
 records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& params);

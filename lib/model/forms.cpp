@@ -57,6 +57,7 @@ class DispScaleForm : public FormImpl<DispScaleForm> {
     params_ = {{"delta_px", "px", 0, 0, true}, {"k", "1", 1, 1, true}};
   }
   std::string name() const override { return "disp_scale"; }
+  double Scale(const double* p, double) const override { return p[1]; }
   int min_distances() const override { return 2; }
   int min_angles() const override { return 1; }
   template <typename T>
@@ -74,6 +75,7 @@ class DispTanForm : public FormImpl<DispTanForm> {
                {"k2", "1", 0, 0, true}};
   }
   std::string name() const override { return "disp_tan"; }
+  double Scale(const double* p, double a) const override { return eq::TanScale(p + 1, a); }
   int min_distances() const override { return 2; }
   int min_angles() const override { return 3; }
   template <typename T>
@@ -106,6 +108,9 @@ class DispKnotsForm : public FormImpl<DispKnotsForm> {
     }
   }
   std::string name() const override { return "disp_knots"; }
+  double Scale(const double* p, double a) const override {
+    return eq::KnotScale(p + 1, knots_rad_, a);
+  }
   int min_distances() const override { return 2; }
   int min_angles() const override { return 1; }
   template <typename T>

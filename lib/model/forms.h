@@ -44,6 +44,9 @@ class Form {
   virtual double Bias(const double* theta, const Features& x) const = 0;
   // ∂bias/∂θ at x (size num_params()).
   virtual std::vector<double> BiasGradient(const double* theta, const Features& x) const = 0;
+  // The depth scale k(α) (true depth over the nominal range's projection) of a disparity-space
+  // form at α; NaN for a form without one (paper6).
+  virtual double Scale(const double* /*theta*/, double /*angle_rad*/) const { return NAN; }
   // Fewest distinct distances and angles the form needs to be identifiable.
   virtual int min_distances() const = 0;
   virtual int min_angles() const = 0;

@@ -1,5 +1,7 @@
 #include "model/margin_fit.h"
 
+#include "model/select.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,37 +12,6 @@ namespace {
 std::vector<Sample> Weighted(std::vector<Sample> samples, const std::vector<double>& w) {
   for (size_t i = 0; i < samples.size(); ++i) samples[i].weight = w[i];
   return samples;
-}
-
-// Guarded held-out errors (predicted − target) of every sample, leaving one test point out
-// with the samples' own weights. False (with a reason) when a fold cannot be fitted.
-bool HeldOutErrors(const std::vector<Sample>& samples, const FitParams& params,
-                   std::vector<double>* errors, std::string* why) {
-  FitParams p = params;
-  p.compute_covariance = false;
-  const auto folds = FoldIds(samples, CvScheme::kPoint);
-  const int n_folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
-  if (n_folds < 2) {
-    *why = "fewer than two test points";
-    return false;
-  }
-  errors->assign(samples.size(), std::numeric_limits<double>::quiet_NaN());
-  for (int f = 0; f < n_folds; ++f) {
-    std::vector<Sample> train;
-    for (size_t i = 0; i < samples.size(); ++i)
-      if (folds[i] != f) train.push_back(samples[i]);
-    const FitResult fit = Fit(train, p);
-    if (!fit.success) {
-      *why = "leaving out test point " + std::to_string(f) + ": " + fit.message;
-      return false;
-    }
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (folds[i] != f) continue;
-      const double b = fit.form->Bias(fit.values.data(), samples[i].x);
-      (*errors)[i] = GuardedBias(b, samples[i].x, params.margins.guard) - samples[i].target_m;
-    }
-  }
-  return true;
 }
 
 // In-sample guarded residuals scaled by n/(n − p): the fallback when test points cannot be left
@@ -107,6 +78,7 @@ JointFitResult FitWithMargins(const std::vector<std::vector<Sample>>& scenarios,
   }
   FitParams plain = params;
   r.errors.assign(n, {});
+  std::vector<std::string> fallback(n);  // why scenario g's errors are in-sample ("" if not)
   for (int round = 0; round <= rounds; ++round) {
     const bool last = round == rounds;
     for (size_t g = 0; g < n; ++g) {
@@ -120,7 +92,11 @@ JointFitResult FitWithMargins(const std::vector<std::vector<Sample>>& scenarios,
       }
       if (last) continue;
       std::vector<double> e;
-      if (!HeldOutErrors(samples, params, &e, &why)) {
+      if (PointHeldOutErrors(samples, params, &e, &why)) {
+        fallback[g].clear();
+      } else {
+        // Said, never silent: the margin then rests on in-sample residuals (scaled by n/(n − p)).
+        fallback[g] = why;
         e = InSampleErrors(samples, r.fits[g], params.margins.guard);
       }
       ResidualData& d = r.errors[g];
@@ -158,6 +134,12 @@ JointFitResult FitWithMargins(const std::vector<std::vector<Sample>>& scenarios,
     f.residual_model = r.residual.models[g];
     f.guard = params.margins.guard;
     f.margin_weighted = weighted;
+    if (!fallback[g].empty()) {
+      f.margin_in_sample = true;
+      f.margin_note = "sigma fitted to in-sample residuals: no held-out errors (" + fallback[g] +
+                      ")";
+      r.warnings.push_back("scenario " + std::to_string(g) + ": " + f.margin_note);
+    }
     SandwichCovariance(Weighted(scenarios[g], w[g]), f.residual_model, &f);
   }
   r.success = true;

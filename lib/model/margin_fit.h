@@ -29,6 +29,9 @@ struct JointFitResult {
   std::vector<FitResult> fits;       // per scenario, with residual model and guard
   std::vector<ResidualData> errors;  // per scenario: depths and squared held-out errors
   ResidualFitResult residual;        // the last residual model fit (fixed scenarios last)
+  // Scenarios whose residual model fell back to in-sample residuals (a test point could not be
+  // left out), each with why; FitResult::margin_in_sample says it per scenario too.
+  std::vector<std::string> warnings;
 };
 
 // Fits the scenarios together (their noise coefficient pooled when params.margins.residual.

@@ -27,10 +27,11 @@ std::vector<Sample> MakeSamples(const std::vector<records::PanelMetrics>& rows,
     const auto& r = rows.at(i);
     Sample s;
     s.x.depth_m = r.median_m;
-    s.x.angle_rad = r.angle_deg * M_PI / 180.0;
+    // The model is even in α (domain.h): a row at −20° is a row at 20°.
+    s.x.angle_rad = std::abs(r.angle_deg) * M_PI / 180.0;
     s.target_m = r.median_m - r.distance_m;
     s.distance_m = r.distance_m;
-    s.angle_deg = r.angle_deg;
+    s.angle_deg = std::abs(r.angle_deg);
     s.row = i;
     if (weight_by_valid_pixels) {
       const double region = std::isnan(r.region_px) ? 1.0 : r.region_px;

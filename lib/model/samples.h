@@ -17,7 +17,7 @@ struct Sample {
   double target_m = 0.0;    // median_m − distance_m
   double weight = 1.0;      // multiplies the squared residual
   double distance_m = 0.0;  // nominal distance (the test point's key, with angle_deg)
-  double angle_deg = 0.0;   // nominal angle
+  double angle_deg = 0.0;   // nominal angle, unsigned (|angle_deg| of the row)
   size_t row = 0;           // index into the rows it came from
 };
 

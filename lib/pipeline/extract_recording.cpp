@@ -19,6 +19,7 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
   m.bag = name;
   panel::ExtractResult r;
   camera::Intrinsics in;
+  std::string disagree;  // where the manifest and the recording differ
   try {
     const io::ManifestRow* truth = manifest ? manifest->Find(path) : nullptr;
     if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
@@ -37,8 +38,22 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
     const auto emitter = info.options.find("Emitter_Enabled");
     if (preset != info.options.end()) m.preset = camera::PresetName(preset->second);
     if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
-    if (truth && truth->preset) m.preset = *truth->preset;
-    if (truth && truth->emitter) m.emitter = *truth->emitter;
+    // The manifest's word wins (it is the user's), but never silently: a disagreement with what
+    // the recording says is written in the row's message.
+    auto compare = [&](const std::optional<std::string>& listed, bool recorded,
+                       const std::string& bag_value, const char* what, const char* option) {
+      if (!listed || !recorded || *listed == bag_value) return;
+      disagree += std::string(disagree.empty() ? "" : "; ") + "the manifest's " + what + " '" +
+                  *listed + "' differs from the recording's " + option + " '" + bag_value +
+                  "' (the manifest's is used)";
+    };
+    if (truth) {
+      compare(truth->preset, preset != info.options.end(), m.preset, "preset", "Visual_Preset");
+      compare(truth->emitter, emitter != info.options.end(), m.emitter, "emitter",
+              "Emitter_Enabled");
+      if (truth->preset) m.preset = *truth->preset;
+      if (truth->emitter) m.emitter = *truth->emitter;
+    }
     panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
     r = panel::ExtractPanel(ahead, in, params, window, box);
     const records::PanelMetrics known = m;  // what the manifest and the bag say
@@ -54,6 +69,10 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
         dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory while reading it" : e.what();
     m.status = "error";
     m.message = what.rfind(path, 0) == 0 ? what : path + ": " + what;
+  }
+  if (!disagree.empty()) {
+    const std::string note = manifest->file() + ": " + disagree;
+    m.message = m.message.empty() ? note : m.message + "; " + note;
   }
   r.metrics = m;
   out.detection_json = panel::DetectionJson(r, in, "\"bag\": \"" + name + "\"");

@@ -20,8 +20,9 @@ struct RecordingResult {
   std::string detection_json;  // its panels.json entry
 };
 
-// manifest: nullptr when none was given; a manifest without a row for the bag makes an error
-// row. box: the article's manual method instead of the automatic detection.
+// manifest: nullptr when none was given; a manifest without a row for the recording (matched by
+// path, io::Manifest::Find) makes an error row. Where the manifest's preset or emitter differs
+// from the one the recording holds, the manifest's is used and the row's message says so. box: the article's manual method instead of the automatic detection.
 RecordingResult ExtractRecording(const std::string& path, const panel::PanelParams& params,
                                  const io::Manifest* manifest,
                                  const std::optional<panel::PixelBox>& box = std::nullopt);

@@ -21,6 +21,10 @@ struct BiasMargin {
   double placement_m = 0.0;  // σ_place [m]
   double noise_per_m = 0.0;  // c [1/m]
   bool weighted = false;     // the bias fit was weighted by 1/σ²(Z)
+  // What σ was fitted to: "held_out" (each row predicted by a fit that left its test point
+  // out) or "in_sample" (a test point could not be left out: residuals scaled by n/(n − p), a
+  // weaker margin).
+  std::string errors = "held_out";
 };
 
 // One fitted scenario (a group of rows, e.g. one light and preset).

@@ -1,5 +1,8 @@
 #include "io/atomic_file.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "io/sha256.h"
@@ -102,6 +105,45 @@ TEST(Sha256, KnownVectors) {
             "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
   EXPECT_EQ(Sha256Hex(std::string(1000000, 'a')),
             "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+// Two runs writing the same pair of outputs at once (the CSV and the panels JSON of
+// panel_extract): each commits its pair as one, so a reader holding the set's lock only ever sees
+// one run's pair, and what is left in place is one run's pair, never the CSV of one and the JSON
+// of the other.
+TEST(AtomicFile, TwoRunsWritingTheSameSetNeverLeaveAMixedPair) {
+  const auto dir = FreshDir("io");
+  const std::string a = (dir / "m.csv").string(), b = (dir / "p.json").string();
+  WriteFilesAtomic({{a, "start"}, {b, "start"}});
+  pid_t kids[2];
+  for (int w = 0; w < 2; ++w) {
+    kids[w] = ::fork();
+    ASSERT_GE(kids[w], 0);
+    if (kids[w] == 0) {
+      for (int i = 0; i < 400; ++i) {
+        const std::string tag = std::to_string(w) + ":" + std::to_string(i);
+        WriteFilesAtomic({{a, tag + " csv"}, {b, tag + " json"}});
+      }
+      ::_exit(0);
+    }
+  }
+  auto stem = [](const std::string& text) { return text.substr(0, text.find(' ')); };
+  int seen = 0, mixed = 0, running = 2;
+  while (running > 0) {
+    {
+      const OutputSetLock lock({a, b});
+      const std::string ca = ReadFile(a), cb = ReadFile(b);
+      ++seen;
+      if (stem(ca) != stem(cb)) ++mixed;
+    }
+    running = 0;
+    for (pid_t k : kids) running += ::waitpid(k, nullptr, WNOHANG) == 0 ? 1 : 0;
+  }
+  for (pid_t k : kids) ::waitpid(k, nullptr, 0);
+  EXPECT_GT(seen, 0);
+  EXPECT_EQ(mixed, 0) << "of " << seen << " looks";
+  EXPECT_EQ(stem(ReadFile(a)), stem(ReadFile(b)));
+  EXPECT_EQ(CountFiles(dir), 2);  // no temporary file left
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include "io/atomic_file.h"
 #include "io/csv.h"
+#include "io/metrics_csv.h"
 #include "io/weights_yaml.h"
 
 namespace depthbias {
@@ -102,37 +103,46 @@ TEST(FitBiasApp, ReproducesTable6OnTheArticlesData) {
     }
     EXPECT_NEAR(g->rmse_m, t.Number(r6, t.RequireColumn("rmse_m")), 0.002) << key;
     EXPECT_NEAR(g->mae_m, t.Number(r6, t.RequireColumn("mae_m")), 0.002) << key;
-    ASSERT_EQ(g->cv.size(), 2u);
+    ASSERT_EQ(g->cv.size(), 3u);
     EXPECT_EQ(g->cv[0].scheme, "point");
+    EXPECT_EQ(g->cv[1].scheme, "distance");
+    EXPECT_EQ(g->cv[2].scheme, "angle");
     EXPECT_GT(g->cv[0].rmse_m, g->rmse_m);  // out of sample is worse than in sample
     EXPECT_EQ(g->covariance.size(), 6u);
   }
 }
 
-// DESIGN.md's goal: the disparity-space default beats eq. 6 out of sample. Both are fitted with
-// their margins and near guard; the default is weighted by 1/σ²(Z) (near rows count for what
-// they are worth), which costs a little held-out RMSE at long range in sunset/HA (0.81 m against
-// eq. 6's 0.78 m): it must win on average and in at least three scenarios of four.
-TEST(FitBiasApp, DefaultModelBeatsPaper6LeaveOnePointOut) {
+// DESIGN.md's goal: the default beats eq. 6 out of sample, both with the same near guard. The
+// default chooses its point fit by pooled held-out RMSE in metres and makes that choice again
+// inside every fold, so its figures are those of the whole procedure. Leaving a distance out and
+// leaving an angle out it wins in all four scenarios; leaving a test point out it wins in three
+// and loses sunset/HA by 9 mm (0.798 against 0.789 m: lib/model/README.md says why).
+TEST(FitBiasApp, DefaultModelBeatsPaper6OutOfSample) {
   const auto dir = Dir();
   ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + (dir / "p6.yaml").string() +
-                                 " --model paper6 --cv point", dir).code, 0);
-  const AppRun r = Exec("fit_bias", "--in " + kArticle + " --out " + (dir / "d.yaml").string() +
-                                     " --cv point", dir);
+                                 " --model paper6", dir).code, 0);
+  const AppRun r = Exec("fit_bias", "--in " + kArticle + " --out " + (dir / "d.yaml").string(),
+                        dir);
   ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("point fit chosen by pooled held-out RMSE"), std::string::npos) << r.out;
   const auto p6 = io::ReadWeightsYaml((dir / "p6.yaml").string());
   const auto def = io::ReadWeightsYaml((dir / "d.yaml").string());
-  EXPECT_EQ(def.model, "disp_knots");
+  EXPECT_NE(def.model, "paper6");
   ASSERT_EQ(p6.groups.size(), def.groups.size());
-  double sum_def = 0.0, sum_p6 = 0.0;
-  int wins = 0;
-  for (size_t i = 0; i < def.groups.size(); ++i) {
-    sum_def += def.groups[i].cv[0].rmse_m;
-    sum_p6 += p6.groups[i].cv[0].rmse_m;
-    wins += def.groups[i].cv[0].rmse_m < p6.groups[i].cv[0].rmse_m;
+  for (size_t s = 0; s < 3; ++s) {
+    int wins = 0;
+    double worst_loss_m = 0.0;
+    for (size_t i = 0; i < def.groups.size(); ++i) {
+      ASSERT_EQ(def.groups[i].cv.size(), 3u);
+      ASSERT_EQ(def.groups[i].cv[s].scheme, p6.groups[i].cv[s].scheme);
+      const double d = def.groups[i].cv[s].rmse_m, p = p6.groups[i].cv[s].rmse_m;
+      wins += d < p;
+      worst_loss_m = std::max(worst_loss_m, d - p);
+    }
+    const std::string scheme = def.groups[0].cv[s].scheme;
+    EXPECT_GE(wins, scheme == "point" ? 3 : 4) << scheme;
+    EXPECT_LT(worst_loss_m, 0.02) << scheme;
   }
-  EXPECT_LT(sum_def, sum_p6);
-  EXPECT_GE(wins, 3);
 }
 
 TEST(FitBiasApp, BadInputsFailCleanlyWithoutOutput) {
@@ -248,6 +258,132 @@ TEST(CorrectDepthApp, AddsColumnsAndRefusesBadWeights) {
                                                " --out " + w.string(), dir),
                      out2, "is also an input");
   EXPECT_NO_THROW(io::ReadWeightsYaml(w.string()));  // untouched
+}
+
+// What has no physical meaning is refused in one line naming the file, before any output
+// (exit 2): weights with a negative depth scale, σ terms that overflow, a knot at 80° or
+// beyond; readings nearer than the camera's minimum range or at 80° off axis or beyond.
+TEST(CorrectDepthApp, RefusesWhatHasNoPhysicalMeaning) {
+  const auto dir = Dir();
+  const auto w = dir / "w.yaml", ws = dir / "ws.yaml", out = dir / "c.csv";
+  ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + w.string() + " --cv none", dir)
+                .code, 0);
+  ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + ws.string() +
+                                 " --cv none --model disp_scale", dir).code, 0);
+  auto edit = [&](const fs::path& from, const std::string& key, const std::string& value,
+                  const std::string& name) {
+    std::string text = io::ReadFile(from.string());
+    const size_t at = text.find(key);
+    EXPECT_NE(at, std::string::npos) << key;
+    const size_t end = text.find_first_of(key == "knots_deg:" ? "\n" : ",}\n", at);
+    text.replace(at, end - at, key + " " + value);
+    Write(dir / name, text);
+    return dir / name;
+  };
+  auto run = [&](const fs::path& weights, const std::string& in) {
+    return Exec("correct_depth", "--weights " + weights.string() + " --in " + in + " --out " +
+                                     out.string(), dir);
+  };
+  const auto neg = edit(ws, "k:", "-0.5", "neg.yaml");
+  ExpectCleanFailure(run(neg, kArticle), out, "neg.yaml: group daylight/HA: weight 'k' is -0.5");
+  const auto sig = edit(w, "noise_per_m:", "1e149", "sig.yaml");  // (c·Z²)² overflows
+  ExpectCleanFailure(run(sig, kArticle), out, "sig.yaml: key 'groups[0].margin'");
+  const auto inf = edit(w, "placement_m:", ".inf", "inf.yaml");
+  ExpectCleanFailure(run(inf, kArticle), out, "inf.yaml: key 'groups[0].margin.placement_m'");
+  const auto knot = edit(w, "knots_deg:", "[0, 10, 20, 80]", "knot.yaml");
+  ExpectCleanFailure(run(knot, kArticle), out, "knot.yaml: key 'groups[0].knots_deg[3]'");
+  // Readings: an angle of 85° (paper6 wrote a correction of hundreds of kilometres) and a
+  // median of 0.1 m.
+  const std::string header =
+      "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+      "hole_rate_pct,valid_pct\n";
+  Write(dir / "a85.csv", header + "a,daylight,on,HA,8,20,9,7.9,7.9,0.1,1,99\n" +
+                             "b,daylight,on,HA,8,85,9,7.9,7.9,0.1,1,99\n");
+  Write(dir / "near.csv", header + "n,sunset,off,HD,4,0,9,0.1,0.1,0.1,1,99\n");
+  ExpectCleanFailure(run(w, (dir / "a85.csv").string()), out,
+                     "a85.csv: row 2 ('b'): angle 85 deg is at or beyond 80 deg off axis");
+  ExpectCleanFailure(run(w, (dir / "near.csv").string()), out,
+                     "near.csv: row 1 ('n'): median 0.1 m is nearer than the camera's minimum "
+                     "range 0.4 m");
+  // fit_bias refuses the same readings.
+  Write(dir / "bad_fit.csv", io::ReadFile(kArticle) + "b,daylight,on,HA,8,85,9,7.9,7.9,0.1,1,99\n");
+  ExpectCleanFailure(Exec("fit_bias", "--in " + (dir / "bad_fit.csv").string() + " --out " +
+                                          out.string(), dir),
+                     out, "bad_fit.csv: bag 'b': angle 85 deg is at or beyond 80 deg");
+}
+
+// Rows that failed upstream are written (empty cells) or left out of the fit: exit 1, as in
+// panel_extract and diagnose_gap.
+TEST(CorrectDepthApp, RowsThatFailedUpstreamGiveExitOne) {
+  const auto dir = Dir();
+  auto rows = io::ReadMetricsCsv(kArticle);
+  records::PanelMetrics failed;
+  failed.bag = "lost.bag";
+  failed.status = "no_panel";
+  failed.message = "no panel found";
+  rows.push_back(failed);
+  io::WriteMetricsCsv((dir / "m.csv").string(), rows);
+  const auto w = dir / "w.yaml", out = dir / "c.csv";
+  const AppRun fit = Exec("fit_bias", "--in " + (dir / "m.csv").string() + " --out " +
+                                          w.string() + " --cv none", dir);
+  EXPECT_EQ(fit.code, 1) << fit.err;
+  EXPECT_NE(fit.err.find("1 not ok, skipped"), std::string::npos) << fit.err;
+  ASSERT_TRUE(fs::exists(w));
+  const AppRun corr = Exec("correct_depth", "--weights " + w.string() + " --in " +
+                                                (dir / "m.csv").string() + " --out " +
+                                                out.string(), dir);
+  EXPECT_EQ(corr.code, 1) << corr.err;
+  EXPECT_TRUE(fs::exists(out));
+  EXPECT_EQ(Exec("correct_depth", "--weights " + w.string() + " --in " + kArticle + " --out " +
+                                      out.string(), dir).code, 0);
+}
+
+// One rule for the sign of the off-axis angle: the model takes the signed angle and uses |α|, so
+// a row at −20° is corrected as the row at 20° (eq. 6's tanα terms are odd: it was not).
+TEST(CorrectDepthApp, ANegativeAngleIsCorrectedAsItsMirror) {
+  const auto dir = Dir();
+  const auto w = dir / "w.yaml", out = dir / "c.csv";
+  ASSERT_EQ(Exec("fit_bias", "--in " + kArticle + " --out " + w.string() +
+                                 " --cv none --model paper6", dir).code, 0);
+  Write(dir / "signed.csv",
+        "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
+        "hole_rate_pct,valid_pct\n"
+        "plus,sunset,on,HA,12,20,9,11.1,11.1,0.1,1,99\n"
+        "minus,sunset,on,HA,12,-20,9,11.1,11.1,0.1,1,99\n");
+  const AppRun r = Exec("correct_depth", "--weights " + w.string() + " --in " +
+                                             (dir / "signed.csv").string() + " --out " +
+                                             out.string(), dir);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const io::CsvTable t = io::ReadCsv(out.string());
+  ASSERT_EQ(t.rows.size(), 2u);
+  for (const char* c : {"corrected_m", "predictive_std_m", "margin_m"})
+    EXPECT_EQ(t.Cell(0, t.RequireColumn(c)), t.Cell(1, t.RequireColumn(c))) << c;
+}
+
+// scripts/coverage_table.sh passes fit_bias's warnings on: a table with two distances cannot be
+// cross-validated leaving a distance out, and the script says so instead of printing a table as
+// if nothing were missing.
+TEST(CoverageTableScript, ShowsFitBiasWarnings) {
+  const auto dir = Dir();
+  std::string two = "", line;
+  std::istringstream article(io::ReadFile(kArticle));
+  for (int n = 0; std::getline(article, line); ++n)
+    if (n == 0 || line.find(",4,") != std::string::npos || line.find(",8,") != std::string::npos)
+      two += line + "\n";
+  Write(dir / "two.csv", two);
+  const std::string cmd = "ARTICLE=" + (dir / "two.csv").string() +
+                          " SEEDS=0 SCHEMES=point,distance BUILD_DIR=" DEPTHBIAS_BINARY_DIR
+                          " bash " DEPTHBIAS_SOURCE_DIR "/scripts/coverage_table.sh 2";
+  const int status = std::system((cmd + " > " + (dir / "stdout").string() + " 2> " +
+                                  (dir / "stderr").string()).c_str());
+  const std::string out = io::ReadFile((dir / "stdout").string());
+  const std::string err = io::ReadFile((dir / "stderr").string());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << err;
+  EXPECT_NE(out.find("coverage of corrected - 2*sigma, held out (point)"), std::string::npos)
+      << out;
+  EXPECT_NE(err.find("fit_bias: warning: group daylight/HA: no distance cross-validation"),
+            std::string::npos) << err;
+  EXPECT_EQ(err.find(" groups from "), std::string::npos) << err;  // the routine line only
 }
 
 }  // namespace

@@ -94,6 +94,7 @@ TEST(FitWithMargins, WeightsNearRowsAndRecoversTheNoiseGrowth) {
   const auto s = NoisyRows(3, 4);
   FitParams p;
   p.model = "disp_scale";
+  p.margins.weighting = MarginParams::Weighting::kOn;  // the default point fit is unweighted
   const JointFitResult r = FitWithMargins({s}, p);
   ASSERT_TRUE(r.success) << r.message;
   const FitResult& f = r.fits[0];
@@ -113,6 +114,7 @@ TEST(FitWithMargins, NearReadingsAreNotMovedByFarRowsScatter) {
   FitParams weighted;
   weighted.model = "disp_scale";
   weighted.margins.guard = NearGuard{};
+  weighted.margins.weighting = MarginParams::Weighting::kOn;
   FitParams plain = weighted;
   plain.margins.weighting = MarginParams::Weighting::kOff;
   const auto truth = testing::DisparityTruth(0.1, [](double) { return 1.0; }, 0.0, 1);
@@ -166,12 +168,15 @@ TEST(Coverage, SafeDistanceCoversWhatKPromisesOnSimulatedNoise) {
   EXPECT_NE(FormatCoverageTable(report, 2.0).find("daylight/HA"), std::string::npos);
 }
 
-// The article's data (scripts/coverage_table.sh prints the table): leave one test point out,
-// k = 2 leaves no truth beyond the safe distance at 4, 8 and 12 m, and one row at 16 m (the
-// daylight/HA 16 m 20° emitter-on recording: 5 % valid pixels, +3.9 m where its emitter-off
-// twin reads −0.9 m); σ grows with range in every scenario; and near readings are not pushed
-// farther: the held-out mean signed error at 4 m is at most +0.05 m in every scenario (the near
-// guard leaves them alone; it is negative, the safe side, where the camera reads short).
+// The article's data (scripts/coverage_table.sh prints the table), leave one test point out, the
+// point fit unweighted (chosen for its error in metres) and σ fitted to its held-out errors:
+// k = 2 leaves no truth beyond the safe distance at 4 and 12 m, and two rows each at 8 m (the
+// daylight/HD 8 m 10° pair: one placement, both rows read +0.43 m where their neighbours read
+// short) and at 16 m (daylight/HA 16 m 20°, whose emitter-on row has 5 % valid pixels and reads
+// +3.9 m); 4 of 128 in all (3.1 % against the normal promise of 2.3 %: p = 0.16 per distance).
+// σ grows with range in every scenario, and near readings are not pushed farther: the held-out
+// mean signed error at 4 m is at most +0.05 m in every scenario (the near guard leaves them
+// alone; it is negative, the safe side, where the camera reads short).
 TEST(Coverage, ArticleDataLeaveOneTestPointOut) {
   const auto rows = io::ReadMetricsCsv(kArticle);
   FitGroupsParams p;
@@ -180,20 +185,23 @@ TEST(Coverage, ArticleDataLeaveOneTestPointOut) {
   ASSERT_TRUE(report.success) << report.message;
   const auto coverage = Coverage(report, 2.0);
   ASSERT_EQ(coverage.size(), 4u);
+  int beyond = 0;
   for (const auto& c : coverage) {
-    EXPECT_LE(c.beyond, c.distance_m < 16 ? 0 : 1) << c.distance_m << " m";
-    // σ of the right size (rms of error/σ near 1), and the misses no rarer than the normal
-    // promise allows: one of 32 happens with probability 1 − (1 − 0.0228)^32 = 0.52.
-    EXPECT_GT(c.rms_z, 0.7) << c.distance_m << " m";
-    EXPECT_LT(c.rms_z, 1.5) << c.distance_m << " m";
-    EXPECT_NEAR(c.promise_p, c.beyond == 0 ? 1.0 : 1.0 - std::pow(1.0 - 0.02275, 32), 2e-3)
-        << c.distance_m << " m";
+    EXPECT_LE(c.beyond, c.distance_m == 4 || c.distance_m == 12 ? 0 : 2) << c.distance_m << " m";
+    beyond += c.beyond;
+    // σ not too wide (rms of error/σ above 0.6), and at 8 m and beyond not too narrow either;
+    // at 4 m the errors are the camera's own short readings, which the guard leaves on the safe
+    // side.
+    EXPECT_GT(c.rms_z, 0.6) << c.distance_m << " m";
+    EXPECT_LT(c.rms_z, c.distance_m == 4 ? 2.5 : 1.5) << c.distance_m << " m";
+    EXPECT_GT(c.promise_p, 0.1) << c.distance_m << " m";  // misses the promise can explain
     for (size_t g = 0; g < c.group_mean_error_m.size(); ++g) {
       if (c.distance_m == 4.0) {
         EXPECT_LE(c.group_mean_error_m[g], 0.05) << report.groups[g].group.Label();
       }
     }
   }
+  EXPECT_LE(beyond, 4);
   EXPECT_LT(coverage[0].mean_std_m, 0.5);  // a 4 m reading keeps a useful safe distance
   for (const auto& g : report.groups) {
     EXPECT_LT(PredictiveStd(g.fit, {4.0, 0.0}), PredictiveStd(g.fit, {16.0, 0.0}))

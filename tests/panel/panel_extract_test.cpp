@@ -200,7 +200,7 @@ TEST_F(PanelExtractBadInput, BadRecordingsGetErrorRowsAndTheBatchGoesOn) {
   fs::resize_file(cut, fs::file_size(cut) / 2);
   std::ofstream(d_ / "manifest.csv") << "bag,distance_m,angle_deg,light\n"
                                      << "notes.bag,4,0,x\nempty.bag,4,0,x\ncut.bag,4,0,x\n"
-                                     << "missing.bag,4,0,x\npanel_04m_00deg.bag,4,0,x\n";
+                                     << "missing.bag,4,0,x\n" << good << ",4,0,x\n";
   const AppRun r = Extract("--manifest " + (d_ / "manifest.csv").string() + " --out " + Out() +
                                " " + text.string() + " " + empty.string() + " " +
                             cut.string() + " " + (d_ / "missing.bag").string() + " " + good, d_);

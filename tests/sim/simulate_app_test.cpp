@@ -311,7 +311,7 @@ TEST(SimulateApp, PanelExtractOnWrittenBagsAgreesWithMetricsOnlyOnEveryCell) {
         ASSERT_TRUE(e.ok()) << s.bag << ": " << e.message;
         ExpectSameMetrics(e, s, 6);
         // The manifest's truth is the metrics-only hole rate of the same draws.
-        const io::ManifestRow* row = manifest.Find(s.bag);
+        const io::ManifestRow* row = manifest.Find((run / "bags" / s.bag).string());
         ASSERT_NE(row, nullptr) << s.bag;
         EXPECT_NEAR(std::stod(row->extras.at("true_hole_rate_pct")), s.hole_rate_pct, 0.001);
         ++compared;
