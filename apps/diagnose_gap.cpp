@@ -4,6 +4,7 @@
 // the base model), a Markdown table on stdout (and DIR/cases.md with --out).
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -41,7 +42,11 @@ constexpr char kUsage[] =
     "  --holdout H          distance, point, light=V or preset=V (distance)\n"
     "  --seed S             seed of the simulation (1; --cases: tables at S + 999 + i)\n"
     "  --frames N           simulated frames per cell, 1 to 100000 (10)\n"
-    "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n";
+    "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n"
+    "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
+    "simulations). Rows the sensor cannot stand for are left out and listed in gap.json's\n"
+    "rows_skipped (exit 1): a preset that is not a D455 preset, a light and preset the sensor\n"
+    "file does not list, a distance outside its range, an angle outside its field of view.\n";
 
 struct BadInput : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -100,10 +105,17 @@ int main(int argc, char** argv) {
         !sim::ParseSensorYaml(io::ReadFile(sensor_file), &base.sensor, &why))
       throw BadInput(sensor_file + ": " + why);
     if (!params.IsValid(&why)) throw BadInput(why);
+    std::vector<gap::Candidate> candidates;
+    if (!gap::SelectCandidates(params.candidates, &candidates, &why))
+      throw BadInput("--candidates: " + why);
+    // Outputs before any work: an existing file or a link to the input as DIR is refused here.
     const std::string json = out_dir.empty() ? "" : (fs::path(out_dir) / "gap.json").string();
     const std::string md = out_dir.empty() ? "" : (fs::path(out_dir) / "report.md").string();
     const std::string cases_md = out_dir.empty() ? "" : (fs::path(out_dir) / "cases.md").string();
-    io::CheckOutputs({json, md, cases_md}, {real_csv, protocol_file, sensor_file});
+    if (!out_dir.empty())
+      io::CheckOutputSet(out_dir, cases ? std::vector<std::string>{"cases.md"}
+                                        : std::vector<std::string>{"gap.json", "report.md"},
+                         {real_csv, protocol_file, sensor_file}, 4e6);
 
     if (cases) {
       params.verify = false;
@@ -116,7 +128,19 @@ int main(int argc, char** argv) {
       }
       return apps::kExitOk;
     }
-    const gap::DiagnoseResult r = gap::Diagnose(io::ReadMetricsCsv(real_csv), base, params);
+    const gap::DesignRules rules = gap::DesignRulesOf(base.sensor);
+    const std::string text = io::ReadFile(real_csv, 16ull << 20);  // 1024 rows: < 1 MB
+    const long lines = std::count(text.begin(), text.end(), '\n') +
+                       (!text.empty() && text.back() != '\n' ? 1 : 0);
+    if (lines - 1 > rules.max_rows)  // the header
+      throw BadInput(real_csv + ": " + std::to_string(lines - 1) + " rows, more than the " +
+                     std::to_string(rules.max_rows) + " a diagnosis takes");
+    std::vector<records::PanelMetrics> rows = io::ParseMetricsCsv(text, real_csv);
+    gap::ScreenRows(rules, &rows);
+    if (rules.scenarios.empty())
+      std::cerr << "diagnose_gap: note: the sensor lists no scenario: every light and preset "
+                   "has its fallback noise\n";
+    const gap::DiagnoseResult r = gap::Diagnose(rows, base, params);
     if (!r.success) throw BadInput(real_csv + ": " + r.message);
     gap::ReportContext ctx{io::BaseName(real_csv), io::Sha256File(real_csv), protocol_file,
                            sensor_file.empty() ? "builtin" : sensor_file, base.seed,
