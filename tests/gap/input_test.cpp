@@ -10,7 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "gap/cases.h"
+#include "io/atomic_file.h"
 #include "io/metrics_csv.h"
+#include "sim/config_yaml.h"
 #include "support/tools.h"
 
 namespace depthbias {
@@ -144,6 +147,39 @@ TEST(DiagnoseGapInput, MessagesNameWhatIsWrong) {
   EXPECT_NE(r.err.find("nosuch"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("ok.csv"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(d / "out"));
+}
+
+// Any campaign: a user's unit, one light and one preset, 16 test points of its own (not the
+// article's) × emitter off and on, is diagnosed from its own cells.
+TEST(DiagnoseGapInput, AUsersUnitOfOneLightAndOnePresetIsDiagnosedOnItsOwnCells) {
+  const fs::path d = Dir("unit");
+  sim::SimParams base;
+  std::string why, sensor;
+  const std::string config = DEPTHBIAS_SOURCE_DIR "/config/";
+  ASSERT_TRUE(sim::ParseProtocolYaml(io::ReadFile(config + "protocol_paper.yaml"), &base.protocol,
+                                     &sensor, &why) &&
+              sim::ParseSensorYaml(io::ReadFile(config + sensor), &base.sensor, &why))
+      << why;
+  base.protocol.distances_m = {3, 6, 9, 13};
+  base.protocol.angles_deg = {-15, 0, 5, 25};
+  gap::WithheldCase unit = gap::NullCases(1)[0];
+  unit.unit = true;
+  gap::SimulateOptions options;
+  options.frames = 4;
+  options.threads = 2;
+  const auto rows = gap::MakeCaseTable(base, unit, 6000, options);
+  ASSERT_EQ(rows.size(), 32u);
+  io::WriteMetricsCsv((d / "unit.csv").string(), rows);
+  const auto r = Diagnose("--real " + (d / "unit.csv").string() + " --out " +
+                              (d / "out").string() + kFast,
+                          d);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string json = ReadFile(d / "out" / "gap.json");
+  EXPECT_NE(json.find("\"rows_used\": 32"), std::string::npos);
+  EXPECT_NE(json.find("\"rows_skipped\": []"), std::string::npos);
+  EXPECT_NE(json.find("\"scenario\": \"daylight/HA\""), std::string::npos);
+  EXPECT_EQ(json.find("sunset"), std::string::npos);
+  EXPECT_NE(json.find("_13m_-15deg_HA"), std::string::npos);  // its own test points
 }
 
 }  // namespace
