@@ -8,7 +8,7 @@
 # equals the injected set (outside the registry: nothing selected, `unexplained` names the right
 # cells), sizes are within 20 %, and the simulated held-out shrink is >= 70 %; the null suite
 # when at least 19 of 20 select nothing. Columns: case, injected, selected, recovered, largest
-# size error, simulated shrink, unexplained, pass, the first criterion not met.
+# size error, simulated shrink, unexplained, pass, every criterion not met.
 # CI (tests/gap/withheld_test.cpp) asserts the criteria and the cases that pass.
 # Usage: scripts/gap_cases.sh [BUILD_DIR] [OUT_DIR] [--no-field]
 #   OUT_DIR/cases.md is written too; the field bags go to OUT_DIR/field (or a temporary folder).

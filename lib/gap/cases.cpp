@@ -1,5 +1,6 @@
 #include "gap/cases.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -204,13 +205,16 @@ std::vector<records::PanelMetrics> MakeCaseTable(const sim::SimParams& base,
 
 std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
                                           const std::vector<WithheldCase>& cases,
-                                          const DiagnoseParams& params, std::uint64_t truth_seed) {
+                                          const DiagnoseParams& params, std::uint64_t truth_seed,
+                                          const std::vector<int>& only) {
   std::vector<CaseOutcome> out;
   std::vector<std::unique_ptr<Simulations>> sims;
   std::vector<Candidate> candidates;
   std::string why;
   if (!SelectCandidates(params.candidates, &candidates, &why)) throw std::invalid_argument(why);
   for (size_t i = 0; i < cases.size(); ++i) {
+    if (!only.empty() && std::find(only.begin(), only.end(), static_cast<int>(i)) == only.end())
+      continue;
     const std::vector<records::PanelMetrics> rows =
         MakeCaseTable(base, cases[i], truth_seed + i, params.simulate);
     Design design;

@@ -93,7 +93,7 @@ struct CaseOutcome {
   std::string unexplained;           // the rows `unexplained` names (ids), or "-"
   bool has_unexplained = false;
   bool pass = false;
-  std::string why;                   // the first criterion not met ("" when it passes)
+  std::string why;                   // every criterion not met ("" when it passes)
 };
 
 // Judges one diagnosis, given as the gap.json it wrote, against the case it was made from;
@@ -104,9 +104,11 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
 // Every case's table made at truth_seed + its index and diagnosed with `base` (tables of the
 // same cells share one set of simulations). Throws std::invalid_argument for a case the
 // registry refuses or a diagnosis that fails.
+// only: the indices of the cases to run (all when empty); a case's seed stays its index's.
 std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
                                           const std::vector<WithheldCase>& cases,
-                                          const DiagnoseParams& params, std::uint64_t truth_seed);
+                                          const DiagnoseParams& params, std::uint64_t truth_seed,
+                                          const std::vector<int>& only = {});
 
 // The cases as a Markdown table; the null suite summarized in one row when given.
 std::string FormatCases(const std::vector<CaseOutcome>& outcomes,

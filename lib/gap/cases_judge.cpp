@@ -88,7 +88,10 @@ class Parser {
       v->type = c == '{' ? Json::kObject : Json::kArray;
       ++i_;
       Space();
-      if (i_ < s_.size() && s_[i_] == (c == '{' ? '}' : ']')) return ++i_, true;
+      if (i_ < s_.size() && s_[i_] == (c == '{' ? '}' : ']')) {
+        ++i_;
+        return true;
+      }
       while (true) {
         Space();
         Json item;
@@ -99,13 +102,16 @@ class Parser {
           if (i_ >= s_.size() || s_[i_++] != ':') return false;
         }
         if (!Value(&item, depth + 1)) return false;
-        if (c == '{') v->members.emplace_back(key, std::move(item));
-        else v->items.push_back(std::move(item));
+        if (c == '{') {
+          v->members.emplace_back(key, std::move(item));
+        } else {
+          v->items.push_back(std::move(item));
+        }
         Space();
         if (i_ >= s_.size()) return false;
-        if (s_[i_] == ',') { ++i_; continue; }
-        if (s_[i_] == (c == '{' ? '}' : ']')) return ++i_, true;
-        return false;
+        const char next = s_[i_++];
+        if (next == ',') continue;
+        return next == (c == '{' ? '}' : ']');
       }
     }
     if (c == '"') return v->type = Json::kString, String(&v->text);
@@ -218,9 +224,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     o.why = "gap.json does not parse";
     return o;
   }
-  auto fail = [&](const std::string& why) {
-    if (o.why.empty()) o.why = why;
-  };
+  auto fail = [&](const std::string& why) { o.why += (o.why.empty() ? "" : "; ") + why; };
   // Selected set.
   std::map<std::string, const Json*> fitted;
   if (const Json* sel = root.Find("selected"))

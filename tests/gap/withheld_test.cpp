@@ -192,5 +192,22 @@ TEST(CaseTables, PlacementIsSharedByATestPointsRecordingsAndTheUnitHas32Rows) {
   for (const auto& r : u) EXPECT_TRUE(r.light == "daylight" && r.preset == "HA") << r.bag;
 }
 
+DiagnoseParams Params() {
+  DiagnoseParams d;
+  d.simulate.threads = 2;
+  return d;
+}
+
+// The same seeds as scripts/gap_cases.sh (diagnose_gap --cases, seed 1): cases at 1000 + i,
+// null tables at 2000 + i.
+constexpr std::uint64_t kCaseSeed = 1000, kNullSeed = 2000;
+
+TEST(Withheld, NoEffectUnderPlacementScatterSelectsNothingInNineteenOfTwenty) {
+  const std::vector<CaseOutcome> nulls =
+      RunWithheldCases(Base(), NullCases(20), Params(), kNullSeed);
+  std::printf("%s", FormatCases({}, nulls).c_str());
+  EXPECT_TRUE(NullSuitePasses(nulls));
+}
+
 }  // namespace
 }  // namespace depthbias::gap
