@@ -4,6 +4,7 @@
 // the base model), a Markdown table on stdout (and DIR/cases.md with --out).
 #include <glog/logging.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -26,12 +27,12 @@ namespace fs = std::filesystem;
 
 constexpr char kUsage[] =
     "usage: diagnose_gap --real REAL.csv --out DIR\n"
-    "       diagnose_gap --cases [--out DIR]\n"
+    "       diagnose_gap --cases [--field FIELD.csv] [--out DIR]\n"
     "Holds a real panel-metrics table against the simulator run on the same cells: where the\n"
     "gap lies, which registered effect explains it, how far it shrinks (in sample and held\n"
     "out). Writes DIR/gap.json and DIR/report.md, all or none. --cases proves the method on\n"
-    "tables made with a known effect (each effect at two sizes): a table on stdout and in\n"
-    "DIR/cases.md. Options (default):\n"
+    "tables made with known effects under placement scatter (docs/gap/cases.md): a table on\n"
+    "stdout and in DIR/cases.md. Options (default):\n"
     "  --real FILE          the real panel-metrics CSV (required without --cases)\n"
     "  --out DIR            output folder (required without --cases)\n"
     "  --protocol FILE      protocol YAML: scene, distance meaning (config/protocol_paper.yaml,\n"
@@ -39,9 +40,16 @@ constexpr char kUsage[] =
     "  --sensor FILE        sensor YAML, or builtin (the protocol's sensor file)\n"
     "  --candidates LIST    all, or registry effects separated by commas (all)\n"
     "  --holdout H          distance, point, light=V or preset=V (distance)\n"
-    "  --seed S             seed of the simulation (1; --cases: tables at S + 999 + i)\n"
+    "  --seed S             seed of the simulation (1; --cases: tables at S + 999 + i,\n"
+    "                       tables without effect at S + 1999 + i)\n"
     "  --frames N           simulated frames per cell, 1 to 100000 (10)\n"
-    "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n";
+    "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n"
+    "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
+    "                       scripts/make_field_campaign.py's bags, offset -0.25 px)\n"
+    "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
+    "simulations). Rows the sensor cannot stand for are left out and listed in gap.json's\n"
+    "rows_skipped (exit 1): a preset that is not a D455 preset, a light and preset the sensor\n"
+    "file does not list, a distance outside its range, an angle outside its field of view.\n";
 
 struct BadInput : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -85,6 +93,7 @@ int main(int argc, char** argv) {
       else if (a == "--frames") frames = args.Number(true, 1, 1e5);
       else if (a == "--threads") threads = args.Number(true, 1, 256);
       else if (a == "--cases") cases = true;
+      else if (a == "--field") real_csv = args.Value();
       else throw BadInput("unknown argument '" + a + "' (see diagnose_gap --help)");
     }
     params.simulate.frames = static_cast<int>(frames);
@@ -100,15 +109,33 @@ int main(int argc, char** argv) {
         !sim::ParseSensorYaml(io::ReadFile(sensor_file), &base.sensor, &why))
       throw BadInput(sensor_file + ": " + why);
     if (!params.IsValid(&why)) throw BadInput(why);
+    std::vector<gap::Candidate> candidates;
+    if (!gap::SelectCandidates(params.candidates, &candidates, &why))
+      throw BadInput("--candidates: " + why);
+    // Outputs before any work: an existing file or a link to the input as DIR is refused here.
     const std::string json = out_dir.empty() ? "" : (fs::path(out_dir) / "gap.json").string();
     const std::string md = out_dir.empty() ? "" : (fs::path(out_dir) / "report.md").string();
     const std::string cases_md = out_dir.empty() ? "" : (fs::path(out_dir) / "cases.md").string();
-    io::CheckOutputs({json, md, cases_md}, {real_csv, protocol_file, sensor_file});
+    if (!out_dir.empty())
+      io::CheckOutputSet(out_dir, cases ? std::vector<std::string>{"cases.md"}
+                                        : std::vector<std::string>{"gap.json", "report.md"},
+                         {real_csv, protocol_file, sensor_file}, 4e6);
 
-    if (cases) {
-      params.verify = false;
+    if (cases) {  // tables at seeds S + 999 + i, the null suite at S + 1999 + i
+      std::vector<gap::CaseOutcome> outcomes =
+          gap::RunWithheldCases(base, gap::DefaultWithheldCases(), params, base.seed + 999);
+      if (!real_csv.empty()) {  // a campaign of field bags through panel_extract (--field)
+        std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(real_csv);
+        gap::ScreenRows(gap::DesignRulesOf(base.sensor), &rows);
+        const gap::DiagnoseResult r = gap::Diagnose(rows, base, params);
+        if (!r.success) throw BadInput(real_csv + ": " + r.message);
+        gap::ReportContext ctx{io::BaseName(real_csv), "", protocol_file, sensor_file, base.seed,
+                               DEPTHBIAS_VERSION};
+        outcomes.push_back(
+            gap::JudgeCase(gap::GapJson(r, params, ctx), gap::FieldCampaignCase(), rows));
+      }
       const std::string table = gap::FormatCases(
-          gap::RunWithheldCases(base, gap::DefaultWithheldCases(), params, base.seed + 999));
+          outcomes, gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999));
       std::fputs(table.c_str(), stdout);
       if (!out_dir.empty()) {
         fs::create_directories(out_dir);
@@ -116,7 +143,19 @@ int main(int argc, char** argv) {
       }
       return apps::kExitOk;
     }
-    const gap::DiagnoseResult r = gap::Diagnose(io::ReadMetricsCsv(real_csv), base, params);
+    const gap::DesignRules rules = gap::DesignRulesOf(base.sensor);
+    const std::string text = io::ReadFile(real_csv, 16ull << 20);  // 1024 rows: < 1 MB
+    const long lines = std::count(text.begin(), text.end(), '\n') +
+                       (!text.empty() && text.back() != '\n' ? 1 : 0);
+    if (lines - 1 > rules.max_rows)  // the header
+      throw BadInput(real_csv + ": " + std::to_string(lines - 1) + " rows, more than the " +
+                     std::to_string(rules.max_rows) + " a diagnosis takes");
+    std::vector<records::PanelMetrics> rows = io::ParseMetricsCsv(text, real_csv);
+    gap::ScreenRows(rules, &rows);
+    if (rules.scenarios.empty())
+      std::cerr << "diagnose_gap: note: the sensor lists no scenario: every light and preset "
+                   "has its fallback noise\n";
+    const gap::DiagnoseResult r = gap::Diagnose(rows, base, params);
     if (!r.success) throw BadInput(real_csv + ": " + r.message);
     gap::ReportContext ctx{io::BaseName(real_csv), io::Sha256File(real_csv), protocol_file,
                            sensor_file.empty() ? "builtin" : sensor_file, base.seed,

@@ -86,6 +86,7 @@ class Scene:
     person_gap_m: float = 0.2  # between the panel's edge and the person (0.05: holding it)
     panel_holes: float = None  # None: 0.97 (HA, 0.98 from 12 m) or HD_PANEL_HOLES
     sigma_px: float = 0.08     # disparity noise
+    disparity_offset_px: float = 0.0  # every disparity read this much too large (a unit's error)
     frames: int = 10
     depth_units_m: float = 0.001
     intrinsics: tuple = (640.0, 640.0, 640.0, 360.0)  # fx, fy, ppx, ppy
@@ -393,7 +394,8 @@ def make(out, sc, frames):
     sigma = np.float32(sc.sigma_px)
 
     def frame(i):
-        d = d0 + sigma * rng.standard_normal(d0.size, dtype=np.float32)
+        d = d0 + np.float32(sc.disparity_offset_px) + sigma * rng.standard_normal(
+            d0.size, dtype=np.float32)
         d = np.round(d * 32.0) / 32.0  # 1/32 px subpixel step
         keep = (d > 0) & (rng.random(d0.size, dtype=np.float32) >= hp)
         counts = np.zeros(H * W, np.uint16)

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <set>
+#include <sstream>
 #include <stdexcept>
+
+#include "gap/report.h"
 
 namespace depthbias::gap {
 namespace {
@@ -15,10 +19,34 @@ std::string Num(double v, int digits = 3) {
   return buf;
 }
 
-std::string Params(const std::map<std::string, double>& p) {
-  std::string s;
-  for (const auto& [k, v] : p) s += (s.empty() ? "" : ", ") + k + " " + Num(v);
-  return s;
+std::uint64_t Mix64(std::uint64_t z) {  // SplitMix64's output function
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+// A standard normal draw fixed by (seed, key): Box–Muller on two hashed uniforms.
+double NormalOf(std::uint64_t seed, const std::string& key) {
+  std::uint64_t h = Mix64(seed + 0x9e3779b97f4a7c15ull);
+  for (unsigned char ch : key) h = Mix64(h ^ ch);
+  const double u1 = (static_cast<double>(Mix64(h + 1) >> 11) + 0.5) / 9007199254740992.0;
+  const double u2 = (static_cast<double>(Mix64(h + 2) >> 11) + 0.5) / 9007199254740992.0;
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+}
+
+std::string PointKey(const std::string& light, double distance_m, double angle_deg) {
+  std::ostringstream k;
+  k << light << '|' << distance_m << '|' << angle_deg;
+  return k.str();
+}
+
+WithheldCase Registry(const std::string& effect, const std::string& size,
+                      std::map<std::string, double> params) {
+  WithheldCase c;
+  c.name = effect + " " + size;
+  c.family = "registry";
+  c.injected = {{effect, std::move(params), ""}};
+  return c;
 }
 
 }  // namespace
@@ -26,126 +54,237 @@ std::string Params(const std::map<std::string, double>& p) {
 std::vector<WithheldCase> DefaultWithheldCases() {
   // Small: a few noise units of the most affected metric on the far cells; large: the effect
   // dominating the table.
-  return {
-      {"disparity_offset", "small", {{"delta_px", 0.07}}},
-      {"disparity_offset", "large", {{"delta_px", 0.35}}},
-      {"depth_scale", "small", {{"scale_rel", 0.01}}},
-      {"depth_scale", "large", {{"scale_rel", 0.06}}},
-      {"range_vs_depth", "small", {{"weight", 0.3}}},
-      {"range_vs_depth", "large", {{"weight", 0.85}}},
-      {"radial_disparity_residual", "small", {{"k_px", 0.2}}},
-      {"radial_disparity_residual", "large", {{"k_px", 0.8}}},
-      {"disparity_noise_gain", "small", {{"gain", 1.3}}},
-      {"disparity_noise_gain", "large", {{"gain", 2.0}}},
-      {"invalidation_gain", "small", {{"gain", 1.8}}},
-      {"invalidation_gain", "large", {{"gain", 5.0}}},
-      {"panel_tilt", "small", {{"yaw_deg", 10}}},
-      {"panel_tilt", "large", {{"yaw_deg", 30}}},
-      {"temporal_drift", "small", {{"rate_px_per_s", 0.4}}},
-      {"temporal_drift", "large", {{"rate_px_per_s", 0.8}}},
-      {"edge_mixing", "small", {{"width_px", 3}, {"strength", 0.5}}},
-      {"edge_mixing", "large", {{"width_px", 5}, {"strength", 0.9}}},
-      {"region_spill", "small", {{"width_px", 2}, {"background_rel", 2.0}}},
-      {"region_spill", "large", {{"width_px", 4}, {"background_rel", 2.5}}},
+  std::vector<WithheldCase> cases = {
+      Registry("disparity_offset", "small", {{"delta_px", 0.07}}),
+      Registry("disparity_offset", "large", {{"delta_px", 0.35}}),
+      Registry("depth_scale", "small", {{"scale_rel", 0.01}}),
+      Registry("depth_scale", "large", {{"scale_rel", 0.06}}),
+      Registry("range_vs_depth", "small", {{"weight", 0.3}}),
+      Registry("range_vs_depth", "large", {{"weight", 0.85}}),
+      Registry("radial_disparity_residual", "small", {{"k_px", 0.2}}),
+      Registry("radial_disparity_residual", "large", {{"k_px", 0.8}}),
+      Registry("disparity_noise_gain", "small", {{"gain", 1.3}}),
+      Registry("disparity_noise_gain", "large", {{"gain", 2.0}}),
+      Registry("invalidation_gain", "small", {{"gain", 1.8}}),
+      Registry("invalidation_gain", "large", {{"gain", 5.0}}),
+      Registry("panel_tilt", "small", {{"yaw_deg", 10}}),
+      Registry("panel_tilt", "large", {{"yaw_deg", 30}}),
+      Registry("temporal_drift", "small", {{"rate_px_per_s", 0.4}}),
+      Registry("temporal_drift", "large", {{"rate_px_per_s", 0.8}}),
+      Registry("edge_mixing", "small", {{"width_px", 3}, {"strength", 0.5}}),
+      Registry("edge_mixing", "large", {{"width_px", 5}, {"strength", 0.9}}),
+      Registry("region_spill", "small", {{"width_px", 2}, {"background_rel", 2.0}}),
+      Registry("region_spill", "large", {{"width_px", 4}, {"background_rel", 2.5}}),
   };
+  WithheldCase c;
+  c.name = "disparity_offset sunset only";
+  c.family = "sunset_only";
+  c.injected = {{"disparity_offset", {{"delta_px", 0.15}}, "sunset"}};
+  cases.push_back(c);
+  c.name = "disparity_offset + temporal_drift";
+  c.family = "pair";
+  c.injected = {{"disparity_offset", {{"delta_px", 0.15}}, ""},
+                {"temporal_drift", {{"rate_px_per_s", 0.6}}, ""}};
+  cases.push_back(c);
+  c.name = "disparity_offset + depth_scale";
+  c.injected = {{"disparity_offset", {{"delta_px", 0.15}}, ""},
+                {"depth_scale", {{"scale_rel", 0.02}}, ""}};
+  cases.push_back(c);
+  // Three standard errors of the offset under the scatter: one far test point alone gives the
+  // offset to ±0.02·f·B/D px (0.076 px at 16 m); 8 points a distance at 4–16 m give ±0.0195 px.
+  c.name = "disparity_offset at the noise floor";
+  c.family = "noise_floor";
+  c.injected = {{"disparity_offset", {{"delta_px", 0.06}}, ""}};
+  cases.push_back(c);
+  c.name = "far over-read ∝ D² (outside)";
+  c.family = "outside";
+  c.injected.clear();
+  c.outside.kind = OutsideEffect::kFarOverRead;
+  c.outside.coef = 0.3125;  // 0.8 m at 16 m, 0.45 m at 12 m, 0.2 m at 8 m
+  c.outside.from_distance_m = 8;
+  cases.push_back(c);
+  c.name = "one test point read 1 m far (outside)";
+  c.outside = OutsideEffect();
+  c.outside.kind = OutsideEffect::kPointStep;
+  c.outside.coef = 1.0;  // six placement σ at 8 m
+  c.outside.light = "daylight";
+  c.outside.distance_m = 8;
+  c.outside.angle_deg = 10;
+  cases.push_back(c);
+  c = WithheldCase();
+  c.name = "unit: daylight HA, 32 rows, disparity_offset -0.25 px";
+  c.family = "unit";
+  c.unit = true;
+  c.injected = {{"disparity_offset", {{"delta_px", -0.25}}, ""}};
+  cases.push_back(c);
+  return cases;
 }
 
-std::vector<records::PanelMetrics> SimulateTable(const sim::SimParams& params,
-                                                 const SimulateOptions& options) {
-  sim::MetricsParams mp;
-  mp.frames = options.frames;
-  mp.threads = options.threads;
-  mp.region_margin_px = options.region_margin_px;
-  std::vector<records::PanelMetrics> rows;
-  for (const auto& r : sim::SimulateProtocolMetrics(params, mp)) rows.push_back(r.metrics);
-  return rows;
+WithheldCase FieldCampaignCase() {
+  WithheldCase c;
+  c.name = "field bags through panel_extract: daylight HA, 32 rows, disparity_offset -0.25 px";
+  c.family = "field";
+  c.unit = true;
+  c.injected = {{"disparity_offset", {{"delta_px", -0.25}}, ""}};
+  return c;
 }
 
-CaseOutcome Judge(const DiagnoseResult& r, const WithheldCase& truth) {
-  CaseOutcome o;
-  o.truth = truth;
-  for (const auto& s : r.steps) o.selected.push_back(s.effect);
-  if (!r.effects.empty()) o.top = r.effects.front().name;
-  for (size_t i = 0; i < r.effects.size(); ++i)
-    if (r.effects[i].name == truth.effect) o.rank = static_cast<int>(i) + 1;
-  if (o.rank == 1) {
-    o.named = true, o.how = "first";
-  } else if (r.ConfoundedWith(truth.effect, o.top)) {
-    o.named = true, o.how = "confounded with " + o.top;
-  } else if (r.ConfoundedWith(truth.effect, "calibration:sigma_d") ||
-             r.ConfoundedWith(truth.effect, "calibration:hole_prob")) {
-    o.named = true, o.how = "confounded with the calibration";
-  }
-  const EffectResult* e = r.Effect(truth.effect);
-  if (!e) return o;
-  const sim::EffectInfo* info = sim::FindEffect(truth.effect);
-  const Candidate* cand = nullptr;
-  const std::vector<Candidate> all = DefaultCandidates();
-  for (const Candidate& c : all)
-    if (c.effect == truth.effect) cand = &c;
-  for (size_t a = 0; a < info->params.size(); ++a) {
-    const std::string& name = info->params[a].name;
-    std::vector<double> v;
-    for (size_t g = 0; g < e->fit.values.size(); ++g)
-      if (e->fit.group_used[g]) v.push_back(e->fit.values[g][a]);
-    std::sort(v.begin(), v.end());
-    const size_t mid = v.size() / 2;
-    const double got = v.empty()      ? NAN
-                       : v.size() % 2 ? v[mid]
-                                      : 0.5 * (v[mid - 1] + v[mid]);
-    o.recovered[name] = got;
-    const double want = truth.params.count(name) ? truth.params.at(name)
-                                                 : info->params[a].default_value;
-    const double neutral = cand && std::isfinite(cand->axes[a].neutral) ? cand->axes[a].neutral : 0;
-    const double scale = std::fabs(want - neutral) > 0 ? std::fabs(want - neutral) : 1.0;
-    o.max_rel_error = std::max(o.max_rel_error, std::fabs(got - want) / scale);
-    if (!std::isfinite(got)) o.max_rel_error = INFINITY;
-  }
-  o.baseline_heldout = r.baseline_heldout.overall;
-  o.shrink_heldout_pct = e->shrink_heldout_pct;
-  o.pass = o.named && o.max_rel_error <= 0.2 && o.shrink_heldout_pct >= 70;
-  return o;
-}
-
-std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
-                                          const std::vector<WithheldCase>& cases,
-                                          const DiagnoseParams& params, std::uint64_t truth_seed) {
-  std::vector<CaseOutcome> out;
-  std::unique_ptr<Simulations> sims;
-  std::vector<Candidate> candidates;
-  std::string why;
-  if (!SelectCandidates(params.candidates, &candidates, &why)) throw std::invalid_argument(why);
-  for (size_t i = 0; i < cases.size(); ++i) {
-    sim::SimParams truth = base;
-    truth.seed = truth_seed + i;
-    if (!sim::BuildDepartures({{cases[i].effect, cases[i].params}}, &truth.departures, &why))
-      throw std::invalid_argument(cases[i].effect + ": " + why);
-    Design design;
-    if (!BuildDesign(SimulateTable(truth, params.simulate), &design, &why))
-      throw std::invalid_argument(cases[i].effect + ": " + why);
-    if (!sims || !sims->Matches(design))
-      sims = std::make_unique<Simulations>(
-          SimulateDesign(base, design, candidates, params.simulate));
-    const DiagnoseResult r = DiagnoseWith(design, *sims, base, params);
-    if (!r.success) throw std::invalid_argument(cases[i].effect + ": " + r.message);
-    out.push_back(Judge(r, cases[i]));
+std::vector<WithheldCase> NullCases(int count) {
+  std::vector<WithheldCase> out;
+  for (int i = 0; i < count; ++i) {
+    WithheldCase c;
+    c.name = "null " + std::to_string(i);
+    c.family = "null";
+    out.push_back(c);
   }
   return out;
 }
 
-std::string FormatCases(const std::vector<CaseOutcome>& outcomes) {
+sim::ProtocolParams CaseProtocol(const sim::ProtocolParams& base, const WithheldCase& c) {
+  sim::ProtocolParams p = base;
+  if (c.unit) {
+    p.lights = {"daylight"};
+    p.presets = {"HA"};
+  }
+  return p;
+}
+
+std::vector<records::PanelMetrics> MakeCaseTable(const sim::SimParams& base,
+                                                 const WithheldCase& c, std::uint64_t seed,
+                                                 const SimulateOptions& options) {
+  sim::SimParams truth = base;
+  truth.seed = seed;
+  truth.protocol = CaseProtocol(base.protocol, c);
+  const std::vector<sim::Cell> nominal = sim::MakeCells(truth.protocol);
+  sim::MetricsParams mp;
+  mp.frames = options.frames;
+  mp.threads = options.threads;
+  mp.region_margin_px = options.region_margin_px;
+  std::set<std::string> lights;
+  for (const sim::Cell& cell : nominal) lights.insert(cell.light);
+  std::vector<records::PanelMetrics> rows(nominal.size());
+  for (const std::string& light : lights) {
+    std::vector<sim::EffectSpec> specs;
+    for (const Injection& in : c.injected)
+      if (in.only_light.empty() || in.only_light == light) specs.push_back({in.effect, in.params});
+    sim::SimParams p = truth;
+    std::string why;
+    if (!sim::BuildDepartures(specs, &p.departures, &why))
+      throw std::invalid_argument(c.name + ": " + why);
+    std::vector<sim::Cell> cells;
+    std::vector<size_t> index;
+    for (size_t i = 0; i < nominal.size(); ++i) {
+      if (nominal[i].light != light) continue;
+      sim::Cell placed = nominal[i];  // its name (and so its noise) stays the nominal cell's
+      const double sd_m = c.placement_pct / 100 * placed.distance_m;
+      placed.distance_m +=
+          sd_m * NormalOf(seed, PointKey(light, nominal[i].distance_m, nominal[i].angle_deg));
+      cells.push_back(placed);
+      index.push_back(i);
+    }
+    const auto results = sim::SimulateCellsMetrics(p, cells, mp);
+    for (size_t j = 0; j < results.size(); ++j) {
+      records::PanelMetrics m = results[j].metrics;
+      m.distance_m = nominal[index[j]].distance_m;
+      m.angle_deg = nominal[index[j]].angle_deg;
+      rows[index[j]] = m;
+    }
+  }
+  for (records::PanelMetrics& r : rows) {
+    double shift = 0;
+    if (c.outside.kind == OutsideEffect::kFarOverRead)
+      shift = c.outside.coef * std::pow(r.distance_m / 10.0, 2);
+    if (c.outside.kind == OutsideEffect::kPointStep && r.light == c.outside.light &&
+        r.distance_m == c.outside.distance_m && r.angle_deg == c.outside.angle_deg)
+      shift = c.outside.coef;
+    r.median_m += shift;
+    r.mean_m += shift;
+  }
+  return rows;
+}
+
+std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
+                                          const std::vector<WithheldCase>& cases,
+                                          const DiagnoseParams& params, std::uint64_t truth_seed,
+                                          const std::vector<int>& only) {
+  std::vector<CaseOutcome> out;
+  std::vector<std::unique_ptr<Simulations>> sims;
+  std::vector<Candidate> candidates;
+  std::string why;
+  if (!SelectCandidates(params.candidates, &candidates, &why)) throw std::invalid_argument(why);
+  for (size_t i = 0; i < cases.size(); ++i) {
+    if (!only.empty() && std::find(only.begin(), only.end(), static_cast<int>(i)) == only.end())
+      continue;
+    const std::vector<records::PanelMetrics> rows =
+        MakeCaseTable(base, cases[i], truth_seed + i, params.simulate);
+    Design design;
+    if (!BuildDesign(rows, &design, &why))
+      throw std::invalid_argument(cases[i].name + ": " + why);
+    const Simulations* shared = nullptr;
+    for (const auto& s : sims)
+      if (s->Matches(design)) shared = s.get();
+    if (!shared) {
+      SimulateOptions options = params.simulate;
+      options.replica = static_cast<int>(design.pairs.size()) < kMinReplicatePairs;
+      sims.push_back(
+          std::make_unique<Simulations>(SimulateDesign(base, design, candidates, options)));
+      shared = sims.back().get();
+    }
+    const DiagnoseResult r = DiagnoseWith(design, *shared, base, params);
+    if (!r.success) throw std::invalid_argument(cases[i].name + ": " + r.message);
+    const ReportContext ctx{cases[i].name, "", "", "", base.seed, ""};
+    out.push_back(JudgeCase(GapJson(r, params, ctx), cases[i], rows));
+  }
+  return out;
+}
+
+bool NullSuitePasses(const std::vector<CaseOutcome>& nulls) {
+  int clean = 0;
+  for (const CaseOutcome& o : nulls) clean += o.pass ? 1 : 0;
+  return !nulls.empty() && 20 * clean >= 19 * static_cast<int>(nulls.size());
+}
+
+std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
+                        const std::vector<CaseOutcome>& nulls) {
+  auto list = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& e : v) s += (s.empty() ? "" : ", ") + e;
+    return s.empty() ? std::string("none") : s;
+  };
   std::string s =
-      "| effect | size | truth | rank | named | recovered | max error | held-out gap before | "
-      "held-out shrink | selected | pass |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "| case | injected | selected | recovered | max error | simulated shrink | unexplained | "
+      "pass | why not |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& o : outcomes) {
-    std::string sel;
-    for (const auto& e : o.selected) sel += (sel.empty() ? "" : ", ") + e;
-    s += "| " + o.truth.effect + " | " + o.truth.size + " | " + Params(o.truth.params) + " | " +
-         std::to_string(o.rank) + " | " + (o.named ? o.how : "no") + " | " +
-         Params(o.recovered) + " | " + Num(100 * o.max_rel_error, 2) + " % | " +
-         Num(o.baseline_heldout, 3) + " | " + Num(o.shrink_heldout_pct, 3) + " % | " +
-         (sel.empty() ? "none" : sel) + " | " + (o.pass ? "yes" : "**no**") + " |\n";
+    std::string truth;
+    for (const Injection& in : o.truth.injected) {
+      std::string p;
+      for (const auto& [k, v] : in.params) p += (p.empty() ? "" : ", ") + k + " " + Num(v);
+      truth += (truth.empty() ? "" : "; ") + in.effect + " (" + p +
+               (in.only_light.empty() ? "" : ", " + in.only_light + " only") + ")";
+    }
+    if (o.truth.outside.kind != OutsideEffect::kNone) truth = "outside the registry";
+    std::string rec;
+    for (const auto& [e, v] : o.recovered) rec += (rec.empty() ? "" : "; ") + e + ": " + v;
+    s += "| " + o.truth.name + " | " + (truth.empty() ? "none" : truth) + " | " +
+         list(o.selected) + " | " + (rec.empty() ? "-" : rec) + " | " +
+         (std::isfinite(o.max_rel_error) ? Num(100 * o.max_rel_error, 2) + " %" : "-") + " | " +
+         (std::isfinite(o.shrink_simulated_pct) ? Num(o.shrink_simulated_pct, 3) + " %"
+                                                : "not published") +
+         " | " + o.unexplained + " | " + (o.pass ? "yes" : "**no**") + " | " + o.why + " |\n";
+  }
+  if (!nulls.empty()) {
+    int clean = 0;
+    std::map<std::string, int> named;
+    for (const CaseOutcome& o : nulls) {
+      clean += o.pass ? 1 : 0;
+      for (const auto& e : o.selected) ++named[e];
+    }
+    std::string which;
+    for (const auto& [e, n] : named) which += (which.empty() ? "" : ", ") + e + " ×" + Num(n);
+    s += "| no effect, " + std::to_string(nulls.size()) + " seeds | none | " +
+         (which.empty() ? "none" : which) + " | - | - | - | - | " +
+         (NullSuitePasses(nulls) ? "yes" : "**no**") + " | " + std::to_string(clean) + " of " +
+         std::to_string(nulls.size()) + " select nothing (19 needed) |\n";
   }
   return s;
 }

@@ -1,9 +1,23 @@
 #pragma once
-// Proof on data whose answer is known: the protocol simulated with an effect the base model
-// lacks (each registered effect at a small but real size and a large one), then diagnosed with
-// the base model. The effect must rank first (or be named within a pair reported as confounded,
-// or be reported as confounded with the calibration), its parameters come back within 20 % of
-// their departure from the neutral value, and the held-out gap shrink by at least 70 %.
+// Proof on tables whose answer is known, made the way a campaign is made: every test point
+// (light, distance, angle) is one placement of the panel, off by a random range error shared by
+// its recordings (2 % of the distance by default), and the table holds one or more effects the
+// base model lacks: each registered effect at a small and a large size, an effect in one light
+// only, correlated pairs, an effect no larger than one test point's placement scatter, effects
+// outside the registry (applied to the simulated rows, never registered), no effect at all, a
+// user's own unit (one light, one preset, 16 test points × emitter on/off). Each table is
+// diagnosed with the base model and judged on what the diagnosis publishes (its gap.json).
+//
+// A case passes only when (JudgeCase):
+//  - the selected set equals the injected set (outside the registry: nothing is selected, and
+//    `unexplained` names cells of the right test points and no others);
+//  - every injected parameter comes back within 20 % of its departure from the neutral value,
+//    scenario by scenario (zero where the effect is absent; whole-pixel widths exactly);
+//  - where the effect is in the registry, the shrink the simulator reproduces with the selected
+//    effects switched on, on held-out cells of the outer loop (how_far.shrink_simulated_pct),
+//    is at least 70 %.
+// A criterion whose field the diagnosis does not publish is not met. A null case passes when
+// nothing is selected; the null suite when at least 19 of 20 seeds pass.
 
 #include <cstdint>
 #include <map>
@@ -14,44 +28,92 @@
 
 namespace depthbias::gap {
 
-struct WithheldCase {
+// A registered effect in a case's table: in every cell, or only in the cells of one light.
+struct Injection {
   std::string effect;
-  std::string size;  // "small", "large"
   std::map<std::string, double> params;
+  std::string only_light;  // "": every cell
 };
 
-// Every effect of the registry at two sizes.
+// An effect outside the registry, applied to the simulated rows (sim's registry never holds it).
+struct OutsideEffect {
+  enum Kind {
+    kNone,
+    // A far over-read growing with the square of the distance that leaves the spread alone
+    // (multipath off the ground, a reflector behind the panel): median_m and mean_m +=
+    // coef·(D / 10 m)² [m]; a disparity offset would also widen plane_std by its Z² law.
+    kFarOverRead,
+    // One test point read coef metres far in every recording (a wrong tape mark, a reflective
+    // object beside it): median_m and mean_m += coef at (light, distance_m, angle_deg).
+    kPointStep,
+  } kind = kNone;
+  double coef = 0;
+  std::string light;
+  double distance_m = 0, angle_deg = 0;
+  double from_distance_m = 0;  // kFarOverRead: cells at or beyond this distance are "right"
+};
+
+struct WithheldCase {
+  std::string name;           // "disparity_offset small", "null 3", ...
+  std::string family;         // registry, sunset_only, pair, noise_floor, outside, null, unit
+  std::vector<Injection> injected;
+  OutsideEffect outside;
+  double placement_pct = 2.0;  // σ of each test point's range error, % of its distance
+  bool unit = false;           // one light (daylight), one preset (HA): 32 rows
+};
+
+// The strict suite: every registered effect at two sizes, a sunset-only disparity offset,
+// offset + drift, offset + scale, a disparity offset no larger than one far test point's
+// placement scatter, two effects outside the registry, a user's unit with a disparity offset
+// (all under 2 % placement scatter).
 std::vector<WithheldCase> DefaultWithheldCases();
+// A user's campaign recorded as bags of field scenes (scripts/make_field_campaign.py: daylight,
+// HA, 16 test points × emitter off/on, each disparity read −0.25 px too large), measured by
+// panel_extract: the injected set is that offset.
+WithheldCase FieldCampaignCase();
+// The null suite: no effect, 2 % placement scatter (tables at seeds seed0 + i).
+std::vector<WithheldCase> NullCases(int count);
+
+// The table of a case: the protocol's cells (the unit's: one light, one preset), each test
+// point placed off by its own range error, the injected effects simulated, the outside effect
+// applied. Rows keep their nominal distance. seed: the truth's simulation and placements
+// (must differ from the diagnosis' seeds).
+std::vector<records::PanelMetrics> MakeCaseTable(const sim::SimParams& base,
+                                                 const WithheldCase& c, std::uint64_t seed,
+                                                 const SimulateOptions& options);
+// The protocol a case's table is made on (the unit's: one light, one preset).
+sim::ProtocolParams CaseProtocol(const sim::ProtocolParams& base, const WithheldCase& c);
 
 struct CaseOutcome {
   WithheldCase truth;
-  int rank = 0;               // of the effect among the candidates alone (1 = first)
-  std::string top;            // the first-ranked effect
-  bool named = false;         // first, or confounded with the first or with the calibration
-  std::string how;            // "first", "confounded with X", "calibration"
   std::vector<std::string> selected;
-  std::map<std::string, double> recovered;  // the effect's fit alone (median over scenarios)
-  double max_rel_error = 0;   // largest |θ̂ − θ| / |θ − neutral| (|θ| for a shape parameter)
-  double baseline_heldout = 0;  // held-out baseline gap (mean z²)
-  double shrink_heldout_pct = 0;
+  std::map<std::string, std::string> recovered;  // effect → "scenario: param value, ..."
+  double max_rel_error = 0;          // over injected parameters and scenarios; NaN: none fitted
+  double shrink_simulated_pct = NAN;  // NaN: not published
+  std::string unexplained;           // the rows `unexplained` names (ids), or "-"
+  bool has_unexplained = false;
   bool pass = false;
+  std::string why;                   // every criterion not met ("" when it passes)
 };
 
-// The protocol's cells simulated with params (the article's twelve columns and the others).
-std::vector<records::PanelMetrics> SimulateTable(const sim::SimParams& params,
-                                                 const SimulateOptions& options);
+// Judges one diagnosis, given as the gap.json it wrote, against the case it was made from;
+// rows: the table's rows (ids, test points).
+CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
+                      const std::vector<records::PanelMetrics>& rows);
 
-// Checks one diagnosis against the effect that made its table.
-CaseOutcome Judge(const DiagnoseResult& result, const WithheldCase& truth);
-
-// Each case's table simulated at seed truth_seed + its index and diagnosed with `base`, one set
-// of simulations serving every case. Throws std::invalid_argument for a case the registry
-// refuses or a diagnosis that fails.
+// Every case's table made at truth_seed + its index and diagnosed with `base` (tables of the
+// same cells share one set of simulations). Throws std::invalid_argument for a case the
+// registry refuses or a diagnosis that fails.
+// only: the indices of the cases to run (all when empty); a case's seed stays its index's.
 std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
                                           const std::vector<WithheldCase>& cases,
-                                          const DiagnoseParams& params, std::uint64_t truth_seed);
+                                          const DiagnoseParams& params, std::uint64_t truth_seed,
+                                          const std::vector<int>& only = {});
 
-// The cases as a Markdown table: effect, size, truth, rank, recovered, shrink, pass.
-std::string FormatCases(const std::vector<CaseOutcome>& outcomes);
+// The cases as a Markdown table; the null suite summarized in one row when given.
+std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
+                        const std::vector<CaseOutcome>& nulls = {});
+// At least 19 of 20 (95 %) null tables select nothing.
+bool NullSuitePasses(const std::vector<CaseOutcome>& nulls);
 
 }  // namespace depthbias::gap

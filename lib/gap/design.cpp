@@ -6,6 +6,8 @@
 #include <set>
 #include <sstream>
 
+#include "camera/presets.h"
+
 namespace depthbias::gap {
 namespace {
 
@@ -30,6 +32,45 @@ std::string Where(const records::PanelMetrics& row, size_t index) {
 }
 
 double Log(double v) { return std::isfinite(v) && v > 0 ? std::log(v) : NAN; }
+
+std::string Num(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+std::string Joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+// Why the rules leave a row out ("" if they do not).
+std::string LeftOutBecause(const DesignRules& rules, const records::PanelMetrics& r) {
+  double option = 0;
+  if (rules.d455_presets_only && !camera::PresetOptionValue(r.preset, &option)) {
+    std::vector<std::string> names;
+    for (int k = 0; k <= 6; ++k) names.push_back(camera::PresetName(k));
+    return "preset '" + r.preset + "' is not a D455 preset (" + Joined(names) + ")";
+  }
+  const std::string scenario = r.light + "/" + r.preset;
+  if (!rules.scenarios.empty() &&
+      std::find(rules.scenarios.begin(), rules.scenarios.end(), scenario) ==
+          rules.scenarios.end())
+    return "light '" + r.light + "' with preset '" + r.preset +
+           "' is not a scenario of the sensor (it lists " + Joined(rules.scenarios) +
+           "): its noise would be a guess; calibrate it (simulate --calibrate-to)";
+  if (std::isfinite(r.distance_m) &&
+      (r.distance_m < rules.min_distance_m || r.distance_m > rules.max_distance_m))
+    return "distance_m " + Num(r.distance_m) + " is outside the sensor's range (" +
+           Num(rules.min_distance_m) + " to " + Num(rules.max_distance_m) + " m)";
+  if (std::isfinite(r.angle_deg) &&
+      (r.angle_deg > rules.max_right_deg || -r.angle_deg > rules.max_left_deg))
+    return "angle_deg " + Num(r.angle_deg) +
+           " puts the panel's centre outside the sensor's field of view (" +
+           Num(-rules.max_left_deg) + " to " + Num(rules.max_right_deg) + " deg)";
+  return "";
+}
 
 }  // namespace
 
@@ -67,14 +108,62 @@ double QuantizationRms(int metric, double depth_m, double focal_px, double basel
   }
 }
 
+bool DesignRules::IsValid(std::string* why) const {
+  if (!(min_distance_m > 0 && max_distance_m > min_distance_m) || !(max_left_deg > 0) ||
+      !(max_right_deg > 0) || max_left_deg >= 90 || max_right_deg >= 90 || max_rows < 1) {
+    if (why)
+      *why = "design rules: need 0 < min_distance_m < max_distance_m, field of view in (0, 90) "
+             "deg each side, max_rows >= 1";
+    return false;
+  }
+  return true;
+}
+
+DesignRules DesignRulesOf(const sim::SensorParams& sensor) {
+  DesignRules rules;
+  for (const sim::ScenarioParams& s : sensor.scenarios)
+    rules.scenarios.push_back(s.light + "/" + s.preset);
+  rules.min_distance_m = sensor.min_depth_m;
+  rules.max_distance_m = sensor.max_depth_m;
+  const camera::Intrinsics& k = sensor.intrinsics;
+  // Pixel centres at integer coordinates: the image spans [−0.5, width − 0.5].
+  rules.max_left_deg = std::atan((k.ppx + 0.5) / k.fx) * 180 / M_PI;
+  rules.max_right_deg = std::atan((k.width - 0.5 - k.ppx) / k.fx) * 180 / M_PI;
+  return rules;
+}
+
+int ScreenRows(const DesignRules& rules, std::vector<records::PanelMetrics>* rows) {
+  int left_out = 0;
+  for (records::PanelMetrics& r : *rows) {
+    if (!r.ok()) continue;
+    const std::string because = LeftOutBecause(rules, r);
+    if (because.empty()) continue;
+    r.status = "left_out";
+    r.message = because;
+    ++left_out;
+  }
+  return left_out;
+}
+
 bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
                  std::string* why) {
+  if (rows.size() > static_cast<size_t>(DesignRules::kMaxTableRows)) {
+    if (why)
+      *why = "the table has " + std::to_string(rows.size()) + " rows, more than the " +
+             std::to_string(DesignRules::kMaxTableRows) + " a diagnosis takes";
+    return false;
+  }
   Design d;
   std::vector<const records::PanelMetrics*> used;
   for (size_t i = 0; i < rows.size(); ++i) {
     const records::PanelMetrics& r = rows[i];
     if (!r.ok()) {
-      d.skipped.push_back(Where(r, i) + ": status " + r.status);
+      d.skipped.push_back(Where(r, i) + ": " +
+                          (r.status == "left_out" ? r.message
+                                                  : "status " + r.status +
+                                                        (r.message.empty() ? ""
+                                                                           : " (" + r.message +
+                                                                                 ")")));
       continue;
     }
     const std::pair<const char*, double> needed[] = {
@@ -118,7 +207,11 @@ bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
     used.push_back(&r);
   }
   if (used.empty()) {
-    if (why) *why = rows.empty() ? "the table has no rows" : "no row has status ok";
+    if (why)
+      *why = rows.empty()       ? "the table has no rows"
+             : d.skipped.empty() ? "no row has status ok"
+                                 : "no usable row: " + std::to_string(d.skipped.size()) +
+                                       " left out, the first " + d.skipped.front();
     return false;
   }
   for (int m = 0; m < kNumMetrics; ++m) {

@@ -10,6 +10,7 @@
 
 #include "records/panel_metrics.h"
 #include "sim/scene.h"
+#include "sim/sensor.h"
 
 namespace depthbias::gap {
 
@@ -62,18 +63,44 @@ struct Design {
   std::vector<int> metrics;                // compared metrics (Metric values)
   std::vector<double> real;                // [cell·K + k], K = metrics.size(); NaN: missing
   std::vector<std::array<int, 2>> pairs;   // emitter on and off cells of one test point
-  std::vector<std::string> skipped;        // rows left out and why
+  std::vector<std::string> skipped;        // rows left out and why ("row 5 (id): reason")
 
   int num_cells() const { return static_cast<int>(cells.size()); }
   int num_metrics() const { return static_cast<int>(metrics.size()); }
   int num_scenarios() const { return static_cast<int>(scenario_names.size()); }
 };
 
+// What a row must be for the simulator to stand for it, from the sensor (DesignRulesOf). A row
+// outside is left out of the design and listed with its reason (ScreenRows): never simulated
+// with a guessed noise, never silently dropped.
+struct DesignRules {
+  // Scenarios "light/preset" the sensor lists (its calibrated noise and holes); empty: the
+  // sensor lists none, and every scenario has its fallback.
+  std::vector<std::string> scenarios;
+  bool d455_presets_only = true;   // a preset must be one of the D455's (camera/presets.h)
+  double min_distance_m = 0.4;     // the sensor's range: a panel nearer or farther reads nothing
+  double max_distance_m = 25.0;
+  double max_left_deg = 45.0;      // the panel's centre inside the horizontal field of view
+  double max_right_deg = 45.0;
+  // Rows a table may have: each distinct cell is about a hundred simulations (about 0.3 s of
+  // CPU per cell on this machine), so 1024 rows are minutes, and a bigger table is refused.
+  int max_rows = kMaxTableRows;
+
+  static constexpr int kMaxTableRows = 1024;
+  bool IsValid(std::string* why) const;
+};
+DesignRules DesignRulesOf(const sim::SensorParams& sensor);
+
+// Marks every ok row the rules leave out with status "left_out" and the reason in its message;
+// returns how many. BuildDesign then lists them in Design::skipped.
+int ScreenRows(const DesignRules& rules, std::vector<records::PanelMetrics>* rows);
+
 // Rows with a status other than "ok" are skipped (listed in design->skipped). A usable row needs
 // numbers in distance_m, angle_deg, mean_m, median_m, plane_std_m and valid_pct, emitter on or
 // off, and a light and a preset. The extra metrics are compared when the table has them in at
 // least 90 % of its usable rows. Returns false with a one-line reason naming the row otherwise,
-// or when no row is usable.
+// when no row is usable (the reason then says why the first was left out), or when the table
+// has more than DesignRules::kMaxTableRows rows.
 bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
                  std::string* why);
 

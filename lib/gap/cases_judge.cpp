@@ -1,0 +1,324 @@
+// The withheld cases' criteria (cases.h), read from the gap.json a diagnosis wrote: the proof
+// judges what the diagnosis publishes, whichever code made it.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <set>
+
+#include "gap/cases.h"
+
+namespace depthbias::gap {
+namespace {
+
+// A JSON value, read by a small recursive-descent parser (gap.json is ours: no streaming).
+struct Json {
+  enum Type { kNull, kBool, kNumber, kString, kArray, kObject } type = kNull;
+  double number = NAN;
+  std::string text;
+  std::vector<Json> items;
+  std::vector<std::pair<std::string, Json>> members;
+
+  const Json* Find(const std::string& key) const {
+    for (const auto& [k, v] : members)
+      if (k == key) return &v;
+    return nullptr;
+  }
+  bool empty() const {
+    return type == kNull || (type == kArray && items.empty()) ||
+           (type == kObject && members.empty()) || (type == kString && text.empty());
+  }
+};
+
+class Parser {
+ public:
+  explicit Parser(const std::string& s) : s_(s) {}
+  bool Parse(Json* out) {
+    if (!Value(out, 0)) return false;
+    Space();
+    return i_ == s_.size();
+  }
+
+ private:
+  void Space() {
+    while (i_ < s_.size() && (s_[i_] == ' ' || s_[i_] == '\n' || s_[i_] == '\t' || s_[i_] == '\r'))
+      ++i_;
+  }
+  bool Literal(const char* word) {
+    const std::string w(word);
+    if (s_.compare(i_, w.size(), w) != 0) return false;
+    i_ += w.size();
+    return true;
+  }
+  bool String(std::string* out) {
+    if (s_[i_] != '"') return false;
+    for (++i_; i_ < s_.size(); ++i_) {
+      const char c = s_[i_];
+      if (c == '"') {
+        ++i_;
+        return true;
+      }
+      if (c != '\\') {
+        *out += c;
+        continue;
+      }
+      if (++i_ >= s_.size()) return false;
+      switch (s_[i_]) {
+        case 'n': *out += '\n'; break;
+        case 't': *out += '\t'; break;
+        case 'r': *out += '\r'; break;
+        case 'b': *out += '\b'; break;
+        case 'f': *out += '\f'; break;
+        case 'u': {  // the writer escapes control characters only
+          if (i_ + 4 >= s_.size()) return false;
+          *out += static_cast<char>(std::strtol(s_.substr(i_ + 1, 4).c_str(), nullptr, 16));
+          i_ += 4;
+          break;
+        }
+        default: *out += s_[i_];
+      }
+    }
+    return false;
+  }
+  bool Value(Json* v, int depth) {
+    Space();
+    if (i_ >= s_.size() || depth > 64) return false;
+    const char c = s_[i_];
+    if (c == '{' || c == '[') {
+      v->type = c == '{' ? Json::kObject : Json::kArray;
+      ++i_;
+      Space();
+      if (i_ < s_.size() && s_[i_] == (c == '{' ? '}' : ']')) {
+        ++i_;
+        return true;
+      }
+      while (true) {
+        Space();
+        Json item;
+        std::string key;
+        if (c == '{') {
+          if (i_ >= s_.size() || !String(&key)) return false;
+          Space();
+          if (i_ >= s_.size() || s_[i_++] != ':') return false;
+        }
+        if (!Value(&item, depth + 1)) return false;
+        if (c == '{') {
+          v->members.emplace_back(key, std::move(item));
+        } else {
+          v->items.push_back(std::move(item));
+        }
+        Space();
+        if (i_ >= s_.size()) return false;
+        const char next = s_[i_++];
+        if (next == ',') continue;
+        return next == (c == '{' ? '}' : ']');
+      }
+    }
+    if (c == '"') return v->type = Json::kString, String(&v->text);
+    if (Literal("null")) return v->type = Json::kNull, true;
+    if (Literal("true")) return v->type = Json::kBool, v->number = 1, true;
+    if (Literal("false")) return v->type = Json::kBool, v->number = 0, true;
+    char* end = nullptr;
+    v->number = std::strtod(s_.c_str() + i_, &end);
+    if (end == s_.c_str() + i_) return false;
+    v->type = Json::kNumber;
+    i_ = static_cast<size_t>(end - s_.c_str());
+    return true;
+  }
+  const std::string& s_;
+  size_t i_ = 0;
+};
+
+std::string Num(double v, int digits = 3) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+// Every string and every object under a value (the cells `unexplained` may name).
+void Collect(const Json& v, std::vector<std::string>* strings, std::vector<const Json*>* objects) {
+  if (v.type == Json::kString) strings->push_back(v.text);
+  if (v.type == Json::kObject) objects->push_back(&v);
+  for (const auto& item : v.items) Collect(item, strings, objects);
+  for (const auto& [k, item] : v.members) Collect(item, strings, objects);
+}
+
+std::string Stem(std::string id) {
+  if (id.size() > 4 && id.compare(id.size() - 4, 4, ".bag") == 0) id.resize(id.size() - 4);
+  return id;
+}
+
+// The rows `unexplained` names: by id (with or without .bag), or by factor cells (an object
+// with distance_m, and optionally angle_deg, light, preset, emitter).
+std::set<size_t> NamedRows(const Json& u, const std::vector<records::PanelMetrics>& rows) {
+  std::vector<std::string> strings;
+  std::vector<const Json*> objects;
+  Collect(u, &strings, &objects);
+  std::set<size_t> named;
+  for (const std::string& s : strings)
+    for (size_t i = 0; i < rows.size(); ++i)
+      if (Stem(s) == Stem(rows[i].bag)) named.insert(i);
+  for (const Json* o : objects) {
+    const Json* d = o->Find("distance_m");
+    if (!d || d->type != Json::kNumber) continue;
+    const Json* a = o->Find("angle_deg");
+    const Json* l = o->Find("light");
+    const Json* p = o->Find("preset");
+    for (size_t i = 0; i < rows.size(); ++i) {
+      if (std::fabs(rows[i].distance_m - d->number) > 1e-6) continue;
+      if (a && a->type == Json::kNumber && std::fabs(rows[i].angle_deg - a->number) > 1e-6)
+        continue;
+      if (l && l->type == Json::kString && rows[i].light != l->text) continue;
+      if (p && p->type == Json::kString && rows[i].preset != p->text) continue;
+      named.insert(i);
+    }
+  }
+  return named;
+}
+
+// Rows an outside effect makes "right" for `unexplained`, and those it must include (the far
+// end of an over-read; the test point of a step).
+void RightRows(const OutsideEffect& o, const std::vector<records::PanelMetrics>& rows,
+               std::set<size_t>* allowed, std::set<size_t>* needed) {
+  double far = 0;
+  for (const auto& r : rows) far = std::max(far, r.distance_m);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    if (o.kind == OutsideEffect::kFarOverRead && r.distance_m >= o.from_distance_m) {
+      allowed->insert(i);
+      if (r.distance_m == far) needed->insert(i);
+    }
+    if (o.kind == OutsideEffect::kPointStep && r.light == o.light &&
+        r.distance_m == o.distance_m && r.angle_deg == o.angle_deg)
+      allowed->insert(i), needed->insert(i);
+  }
+}
+
+// The injected value of a parameter in a scenario ("light/preset"), or the neutral value.
+struct Truth {
+  double value = NAN;
+  bool present = false;
+};
+Truth TruthIn(const Injection& in, const std::string& scenario, const Axis& axis) {
+  const std::string light = scenario.substr(0, scenario.find('/'));
+  Truth t;
+  t.present = in.only_light.empty() || in.only_light == light;
+  if (!t.present) return t.value = axis.neutral, t;
+  const auto it = in.params.find(axis.param);
+  if (it != in.params.end()) return t.value = it->second, t;
+  const sim::EffectInfo* info = sim::FindEffect(in.effect);
+  for (const auto& p : info->params)
+    if (p.name == axis.param) t.value = p.default_value;
+  return t;
+}
+
+}  // namespace
+
+CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
+                      const std::vector<records::PanelMetrics>& rows) {
+  CaseOutcome o;
+  o.truth = truth;
+  o.unexplained = "-";
+  Json root;
+  if (!Parser(gap_json).Parse(&root) || root.type != Json::kObject) {
+    o.why = "gap.json does not parse";
+    return o;
+  }
+  auto fail = [&](const std::string& why) { o.why += (o.why.empty() ? "" : "; ") + why; };
+  // Selected set.
+  std::map<std::string, const Json*> fitted;
+  if (const Json* sel = root.Find("selected"))
+    for (const Json& s : sel->items)
+      if (const Json* name = s.Find("name")) {
+        o.selected.push_back(name->text);
+        fitted[name->text] = s.Find("params");
+      }
+  std::set<std::string> want, got(o.selected.begin(), o.selected.end());
+  for (const Injection& in : truth.injected) want.insert(in.effect);
+  if (got != want) fail("selected set differs from the injected set");
+  // Sizes, scenario by scenario.
+  std::set<std::string> scenarios;
+  for (const auto& r : rows)
+    if (r.ok()) scenarios.insert(r.light + "/" + r.preset);
+  const std::vector<Candidate> all = DefaultCandidates();
+  o.max_rel_error = truth.injected.empty() ? NAN : 0.0;
+  for (const Injection& in : truth.injected) {
+    const Candidate* cand = nullptr;
+    for (const Candidate& c : all)
+      if (c.effect == in.effect) cand = &c;
+    const auto it = fitted.find(in.effect);
+    if (!cand || it == fitted.end() || !it->second) {
+      o.max_rel_error = INFINITY;
+      continue;
+    }
+    const Json& params = *it->second;
+    const bool per_scenario = !params.members.empty() &&
+                              params.members.front().second.type == Json::kObject;
+    std::string shown;
+    for (const Axis& axis : cand->axes) {
+      double scale = 0;
+      for (const std::string& sc : scenarios) {
+        const Truth t = TruthIn(in, sc, axis);
+        if (t.present)
+          scale = std::max(scale, std::isfinite(axis.neutral) ? std::fabs(t.value - axis.neutral)
+                                                              : std::fabs(t.value));
+      }
+      if (!(scale > 0)) scale = 1;
+      for (const std::string& sc : scenarios) {
+        const Truth t = TruthIn(in, sc, axis);
+        if (!std::isfinite(t.value)) continue;  // a shape parameter where the effect is absent
+        const Json* group = per_scenario ? params.Find(sc) : &params;
+        const Json* v = group ? group->Find(axis.param) : nullptr;
+        const double got_v = v && v->type == Json::kNumber ? v->number : NAN;
+        double err = std::fabs(got_v - t.value) / scale;
+        if (axis.discrete) err = got_v == t.value ? 0.0 : INFINITY;
+        if (!std::isfinite(got_v)) err = INFINITY;
+        o.max_rel_error = std::max(o.max_rel_error, err);
+        if (per_scenario || shown.find(axis.param) == std::string::npos)
+          shown += (shown.empty() ? "" : ", ") + (per_scenario ? sc + " " : "") + axis.param +
+                   " " + Num(got_v);
+      }
+    }
+    o.recovered[in.effect] = (per_scenario ? "per scenario: " : "") + shown;
+  }
+  if (!truth.injected.empty() && !(o.max_rel_error <= 0.2))
+    fail("a size is off by more than 20 %");
+  // The shrink the simulator reproduces, held out.
+  if (const Json* how = root.Find("how_far"))
+    if (const Json* s = how->Find("shrink_simulated_pct"))
+      if (s->type == Json::kNumber) o.shrink_simulated_pct = s->number;
+  if (!truth.injected.empty()) {
+    if (!std::isfinite(o.shrink_simulated_pct)) fail("no how_far.shrink_simulated_pct");
+    else if (o.shrink_simulated_pct < 70) fail("simulated shrink below 70 %");
+  }
+  // What is left unexplained.
+  const Json* u = root.Find("unexplained");
+  o.has_unexplained = u && !u->empty();
+  std::set<size_t> named;
+  if (u) named = NamedRows(*u, rows);
+  if (o.has_unexplained) {
+    o.unexplained = named.empty() ? "names no row" : std::to_string(named.size()) + " rows";
+    if (!named.empty()) {
+      std::set<double> d;
+      for (size_t i : named) d.insert(rows[i].distance_m);
+      o.unexplained += " at ";
+      for (double x : d) o.unexplained += Num(x) + " ";
+      o.unexplained += "m";
+    }
+  }
+  if (truth.outside.kind != OutsideEffect::kNone) {
+    std::set<size_t> allowed, needed;
+    RightRows(truth.outside, rows, &allowed, &needed);
+    bool inside = !named.empty(), hits = false;
+    for (size_t i : named) {
+      inside = inside && allowed.count(i);
+      hits = hits || needed.count(i);
+    }
+    if (!u) fail("no unexplained in gap.json");
+    else if (!inside || !hits) fail("unexplained does not name the right cells");
+  }
+  o.pass = o.why.empty();
+  return o;
+}
+
+}  // namespace depthbias::gap
