@@ -139,6 +139,13 @@ struct ObstacleDetector::Impl {
   std::vector<float> ray_norm;
   // Per-frame buffers.
   std::vector<Eigen::Vector3f> points;
+  std::vector<int> sample_of;  // the sample (index in `pixel`) of each point
+  // The depth Z of every sample in this frame and the one before (0: none), for the temporal
+  // spread at the obstacles.
+  std::vector<float> depth, previous_depth;
+  bool has_previous = false;
+  std::uint64_t previous_index = 0;
+  TemporalNoise temporal;
   std::vector<int> voxel_of;
   std::vector<Eigen::Vector3f> voxels;
   VoxelGrid grid;
@@ -147,7 +154,8 @@ struct ObstacleDetector::Impl {
 ObstacleDetector::ObstacleDetector(const camera::Intrinsics& intrinsics,
                                    const DetectorParams& params,
                                    const model::ScenarioModel& scenario)
-    : params_(params), impl_(std::make_unique<Impl>()) {
+    : params_(params), sigma_d_px_(params.cluster.disparity_noise_px),
+      impl_(std::make_unique<Impl>()) {
   std::string why;
   if (!params.IsValid(&why)) throw std::invalid_argument("detector parameters: " + why);
   if (!intrinsics.IsValid(&why)) throw std::invalid_argument("intrinsics: " + why);
@@ -168,6 +176,19 @@ ObstacleDetector::ObstacleDetector(const camera::Intrinsics& intrinsics,
 
 ObstacleDetector::~ObstacleDetector() = default;
 
+void ObstacleDetector::SetDisparityNoisePx(double sigma_px) {
+  if (!(sigma_px > 0.0) || !std::isfinite(sigma_px))
+    throw std::invalid_argument("disparity noise must be > 0 px");
+  sigma_d_px_ = sigma_px;
+}
+
+const TemporalNoise& ObstacleDetector::temporal_noise() const { return impl_->temporal; }
+
+void ObstacleDetector::ResetTemporalNoise() {
+  impl_->temporal.Clear();
+  impl_->has_previous = false;
+}
+
 FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::uint64_t index) {
   FrameDetections out;
   out.frame = index;
@@ -184,25 +205,47 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
 
   // 1. Cloud: one pixel per block, deprojected along its precomputed ray.
   m.points.clear();
+  m.sample_of.clear();
+  m.depth.assign(m.pixel.size(), 0.0f);
   const float units = static_cast<float>(frame.depth_units_m);
   const float min_r = static_cast<float>(p.cloud.min_range_m);
   const float max_r = static_cast<float>(p.cloud.max_range_m);
   const std::uint16_t* counts = frame.counts.data();
   for (size_t k = 0; k < m.pixel.size(); ++k) {
     const std::uint16_t c = counts[m.pixel[k]];
-    if (c == 0) continue;
+    if (c == 0 || c == 0xFFFF) continue;  // no depth, or a count at full scale
     const float z = c * units;
     const float r = z * m.ray_norm[k];
     if (r < min_r || r > max_r) continue;
     m.points.push_back(z * m.ray[k]);
+    m.sample_of.push_back(static_cast<int>(k));
+    m.depth[k] = z;
   }
   out.cloud_points = static_cast<int>(m.points.size());
+  out.samples = static_cast<int>(m.pixel.size());
+  out.valid_pct = out.samples > 0 ? 100.0 * out.cloud_points / out.samples : 0.0;
+  out.blind = !(out.valid_pct >= p.cloud.min_valid_pct) || out.samples == 0;
+  out.zone = out.blind ? Zone::kStop : Zone::kClear;
 
   // 2. Voxel grid.
   m.grid.Build(m.points, static_cast<float>(p.voxel.leaf_m), &m.voxel_of, &m.voxels);
   const int nv = static_cast<int>(m.voxels.size());
   out.voxels = nv;
   out.success = true;
+  out.disparity_noise_px = sigma_d_px_;
+  // This frame's depths become the previous ones once it is done.
+  struct KeepDepths {
+    Impl& m;
+    std::uint64_t index;
+    ~KeepDepths() {
+      std::swap(m.depth, m.previous_depth);
+      m.has_previous = true;
+      m.previous_index = index;
+    }
+  } keep{m, index};
+  const bool follows = m.has_previous && index == m.previous_index + 1 &&
+                       m.previous_depth.size() == m.depth.size();
+  const double fb = m.intrinsics.fx * p.baseline_m;  // f·B [px·m]
   if (nv == 0) return out;
   Cloud::Ptr cloud(new Cloud);
   cloud->resize(static_cast<size_t>(nv));
@@ -354,6 +397,15 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
     o.points = static_cast<int>(members[c].size());
     o.height_m = h_hi - h_lo;
     if (o.height_m < p.obstacle.min_height_m) continue;
+    // The temporal spread at the obstacle: Δd = f·B·(1/Z − 1/Z_prev) of each of its samples
+    // that held a depth in the frame before too.
+    if (follows) {
+      for (int i : members[c]) {
+        const size_t k = static_cast<size_t>(m.sample_of[static_cast<size_t>(i)]);
+        if (m.previous_depth[k] > 0.0f)
+          m.temporal.Add(fb * (1.0 / m.depth[k] - 1.0 / m.previous_depth[k]));
+      }
+    }
     o.centroid_m = sum / static_cast<double>(members[c].size());
     o.azimuth_deg = std::atan2(o.centroid_m.x(), o.centroid_m.z()) * kRadToDeg;
     o.off_axis_deg =
@@ -367,10 +419,15 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
     // 1.2533·σ_Z(Z)/√n with σ_Z = Z²·σ_d/(f·B) (the median's efficiency for a normal).
     o.corrected_range_m = scenario.CorrectedM(o.depth_m, o.off_axis_deg);
     const double model_std = scenario.PredictiveStdM(o.depth_m, o.off_axis_deg);
-    const double reading_std = 1.2533 * o.depth_m * o.depth_m * p.cluster.disparity_noise_px /
-                               (m.intrinsics.fx * p.baseline_m) / std::sqrt(o.points);
+    const double reading_std =
+        1.2533 * o.depth_m * o.depth_m * sigma_d_px_ / fb / std::sqrt(o.points);
     o.std_m = std::hypot(model_std, reading_std);
-    o.safe_range_m = o.corrected_range_m - p.k * o.std_m;
+    // Never farther than the camera saw it (unless asked): min(raw, corrected − k·σ). A safe
+    // range that is not a number stays one (its zone is stop).
+    const double model_safe_m = o.corrected_range_m - p.k * o.std_m;
+    o.safe_range_m = p.safe_beyond_raw || std::isnan(model_safe_m)
+                         ? model_safe_m
+                         : std::min(o.range_m, model_safe_m);
     o.near_guarded = scenario.NearGuarded(o.depth_m, o.off_axis_deg);
     o.zone = ZoneFor(o.safe_range_m, p.zones);
     out.obstacles.push_back(o);
@@ -379,6 +436,10 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
             [](const DetectedObstacle& a, const DetectedObstacle& b) {
               return a.range_m < b.range_m;
             });
+  for (DetectedObstacle& o : out.obstacles) {
+    if (out.blind) o.zone = Zone::kStop;
+    out.zone = std::min(out.zone, o.zone);  // kStop < kSlow < kClear
+  }
   return out;
 }
 
