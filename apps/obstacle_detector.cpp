@@ -79,12 +79,12 @@ std::string EstimateNoise(const std::string& bag, const detect::DetectorParams& 
   for (; n < params.noise.frames && first.Next(&frame); ++n) {
     if (!detector->Detect(frame, static_cast<std::uint64_t>(n)).success) break;
   }
-  const detect::TemporalNoise& t = detector->temporal_noise();
-  const double sigma_px = t.SigmaPx();
-  const std::string pairs = std::to_string(t.pairs()) + " pixel pairs at obstacles in " +
-                            std::to_string(n) + " frames";
+  const double sigma_px = detector->temporal_noise().SigmaPx();
+  const long long measured = detector->temporal_noise().pairs();
+  const std::string pairs =
+      std::to_string(measured) + " pixel pairs at obstacles in " + std::to_string(n) + " frames";
   detector->ResetTemporalNoise();
-  if (t.pairs() < params.noise.min_pairs)
+  if (measured < params.noise.min_pairs)
     return configured + " (" + pairs + ": too few to measure it)";
   if (!(sigma_px > 0.0)) return configured + " (" + pairs + ": none changed between frames)";
   detector->SetDisparityNoisePx(sigma_px);

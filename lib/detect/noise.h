@@ -1,10 +1,11 @@
 #pragma once
 // The disparity noise σ_d of a recording, from its own frames: the temporal spread at its
 // obstacles. Between two consecutive frames the disparity d = f·B/Z of a static surface seen by
-// one pixel changes by the noise of both frames, so σ_d = σ(Δd)/√2; the robust σ
-// (1.4826·median |Δd|, about zero) ignores the few pixels where an edge or a hole changed the
-// surface. A camera that moves between frames widens Δd: σ_d then comes out larger, which makes
-// the margin wider, not narrower.
+// one pixel changes by the noise of both frames, so σ_d = σ(Δd)/√2. The spread is the RMS of
+// Δd within five robust scales (1.4826·median |Δd|), which leaves out the few pixels where an
+// edge or a hole changed the surface; the median alone would jump between the values of the
+// camera's 1/32 px disparity lattice. A camera that moves between frames widens Δd: σ_d then
+// comes out larger, which makes the margin wider, not narrower.
 
 #include <string>
 #include <vector>
@@ -25,7 +26,7 @@ class TemporalNoise {
   TemporalNoise();
   void Add(double delta_disparity_px);
   long long pairs() const { return pairs_; }
-  // σ_d = 1.4826·median|Δd|/√2 [px]; NaN without pairs.
+  // σ_d = RMS(Δd within 5·1.4826·median|Δd|)/√2 [px]; NaN without pairs.
   double SigmaPx() const;
   void Clear();
 
