@@ -68,7 +68,7 @@ run() { for _ in $(seq "$REPEAT"); do timed "$@"; done | best; }
 det_s=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" \
           --config config/obstacle_detector.yaml --out "$OUT/d.jsonl" "$BAG")
 lines=$(wc -l < "$OUT/d.jsonl")
-obst=$({ grep -o '"zone"' "$OUT/d.jsonl" || true; } | wc -l)
+obst=$({ grep -o '"points"' "$OUT/d.jsonl" || true; } | wc -l)
 read_s=$(run "$BIN/bag_info" --read-all "$BAG")
 play_s=$(run "$PY" "$OUT/playback.py" "$BAG" "$FRAMES")
 played=$(cat "$OUT/stdout.txt")

@@ -106,6 +106,7 @@ bool ParseDetectorYaml(const std::string& text, DetectorParams* params, std::str
       r.Int("stride_px", &p.cloud.stride_px);
       r.Double("min_range_m", &p.cloud.min_range_m);
       r.Double("max_range_m", &p.cloud.max_range_m);
+      r.Double("min_valid_pct", &p.cloud.min_valid_pct);
       r.CheckKnown();
     }
     if (const YAML::Node n = top.Get("voxel")) {
@@ -148,7 +149,15 @@ bool ParseDetectorYaml(const std::string& text, DetectorParams* params, std::str
       r.Double("slow_margin_m", &p.zones.slow_margin_m);
       r.CheckKnown();
     }
+    if (const YAML::Node n = top.Get("noise")) {
+      MapReader r(n, "noise");
+      r.Bool("from_frames", &p.noise.from_frames);
+      r.Int("frames", &p.noise.frames);
+      r.Int("min_pairs", &p.noise.min_pairs);
+      r.CheckKnown();
+    }
     top.Double("k", &p.k);
+    top.Bool("safe_beyond_raw", &p.safe_beyond_raw);
     top.CheckKnown();
     std::string invalid;
     if (!p.IsValid(&invalid)) throw ParseError(invalid);

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "camera/intrinsics.h"
+#include "detect/noise.h"
 #include "detect/params.h"
 #include "model/bias_model.h"
 #include "records/depth_frame.h"
@@ -36,7 +37,8 @@ struct DetectedObstacle {
   double range_m = 0.0;            // median Euclidean range of its points (raw)
   double corrected_range_m = 0.0;  // the model's corrected range at (Z, α): CorrectedM
   double std_m = 0.0;              // √(model σ at (Z, α)² + this frame's median noise²)
-  double safe_range_m = 0.0;       // corrected − k·σ
+  double safe_range_m = 0.0;       // min(range_m, corrected − k·σ) (params.safe_beyond_raw: the
+                                   // latter alone)
   bool near_guarded = false;       // the model left (part of) its correction out (near guard)
   Zone zone = Zone::kClear;
   int points = 0;                  // cloud points
@@ -50,8 +52,17 @@ struct FrameDetections {
   std::string message;             // why not (a frame of another size)
   std::uint64_t frame = 0;         // index of the frame in the recording, from 0
   double timestamp_s = 0.0;        // the frame's device timestamp
+  // Valid samples (a depth within the cloud's ranges) as a share of the sampled pixels [%];
+  // below cloud.min_valid_pct the frame is blind: "I saw nothing" is not "there is nothing".
+  double valid_pct = 0.0;
+  bool blind = false;
+  // The frame's zone: the most severe of its obstacles', clear when there are none; stop when
+  // the frame is blind (and then every obstacle in it is stop too: nothing is cleared on it).
+  Zone zone = Zone::kClear;
   std::vector<DetectedObstacle> obstacles;  // nearest first
+  double disparity_noise_px = 0.0; // σ_d of this frame's margin (the reading's noise)
   // Diagnostics.
+  int samples = 0;                 // sampled pixels (one per stride block)
   int cloud_points = 0;
   int voxels = 0;
   bool ground_found = false;
@@ -76,9 +87,19 @@ class ObstacleDetector {
 
   const DetectorParams& params() const { return params_; }
 
+  // σ_d of the margin's reading noise [px]: cluster.disparity_noise_px until set (the app sets
+  // the recording's own, noise.h). Throws std::invalid_argument unless finite and > 0.
+  void SetDisparityNoisePx(double sigma_px);
+  double disparity_noise_px() const { return sigma_d_px_; }
+  // The temporal spread at the obstacles of consecutive frames seen so far (frames whose
+  // indices follow each other), and a fresh start.
+  const TemporalNoise& temporal_noise() const;
+  void ResetTemporalNoise();
+
  private:
   struct Impl;
   DetectorParams params_;
+  double sigma_d_px_ = 0.0;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -1,50 +1,35 @@
 #include "detect/json.h"
 
-#include <cmath>
-#include <cstdio>
+#include "records/json_writer.h"
 
 namespace depthbias::detect {
-namespace {
 
-// A number JSON can hold: fixed decimals, null for NaN or infinity.
-void Number(std::string* out, double v, int decimals) {
-  if (!std::isfinite(v)) {
-    *out += "null";
-    return;
+std::string FormatJsonLine(const FrameDetections& d, bool safe_beyond_raw) {
+  records::JsonWriter w(records::JsonWriter::Layout::kOneLine);
+  w.BeginObject()
+      .Integer("frame", static_cast<long long>(d.frame))
+      .Number("timestamp_s", d.timestamp_s, 15)
+      .String("status", d.blind ? "blind" : "ok")
+      .Number("valid_pct", d.valid_pct)
+      .String("zone", ZoneName(d.zone))
+      .Number("disparity_noise_px", d.disparity_noise_px);
+  if (safe_beyond_raw) w.Bool("safe_beyond_raw", true);
+  w.BeginArray("obstacles");
+  for (const DetectedObstacle& o : d.obstacles) {
+    w.BeginObject().BeginArray("centroid_m");
+    for (int k = 0; k < 3; ++k) w.Number(o.centroid_m[k]);
+    w.EndArray()
+        .Number("azimuth_deg", o.azimuth_deg)
+        .Number("range_m", o.range_m)
+        .Number("corrected_range_m", o.corrected_range_m)
+        .Number("std_m", o.std_m)
+        .Number("safe_range_m", o.safe_range_m)
+        .String("zone", ZoneName(o.zone))
+        .Integer("points", o.points)
+        .EndObject();
   }
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  *out += buf;
-}
-
-}  // namespace
-
-std::string FormatJsonLine(const FrameDetections& d) {
-  std::string s = "{\"frame\": " + std::to_string(d.frame) + ", \"timestamp_s\": ";
-  Number(&s, d.timestamp_s, 6);
-  s += ", \"obstacles\": [";
-  for (size_t i = 0; i < d.obstacles.size(); ++i) {
-    const DetectedObstacle& o = d.obstacles[i];
-    s += i ? ", {" : "{";
-    s += "\"centroid_m\": [";
-    for (int k = 0; k < 3; ++k) {
-      if (k) s += ", ";
-      Number(&s, o.centroid_m[k], 3);
-    }
-    s += "], \"azimuth_deg\": ";
-    Number(&s, o.azimuth_deg, 2);
-    s += ", \"range_m\": ";
-    Number(&s, o.range_m, 3);
-    s += ", \"corrected_range_m\": ";
-    Number(&s, o.corrected_range_m, 3);
-    s += ", \"std_m\": ";
-    Number(&s, o.std_m, 3);
-    s += ", \"safe_range_m\": ";
-    Number(&s, o.safe_range_m, 3);
-    s += ", \"zone\": \"" + ZoneName(o.zone) + "\", \"points\": " + std::to_string(o.points) + "}";
-  }
-  s += "]}\n";
-  return s;
+  w.EndArray().EndObject();
+  return w.Text();
 }
 
 }  // namespace depthbias::detect

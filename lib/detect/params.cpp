@@ -18,6 +18,8 @@ bool CloudParams::IsValid(std::string* why) const {
   if (stride_px < 1 || stride_px > 64) return Fail(why, "cloud.stride_px must be in [1, 64]");
   if (!(min_range_m >= 0.0) || !(max_range_m > min_range_m) || !std::isfinite(max_range_m))
     return Fail(why, "cloud: need 0 <= min_range_m < max_range_m");
+  if (!(min_valid_pct >= 0.0 && min_valid_pct <= 100.0))
+    return Fail(why, "cloud.min_valid_pct must be in [0, 100]");
   return true;
 }
 
@@ -76,9 +78,12 @@ double ZoneParams::StoppingDistanceM() const {
 
 bool DetectorParams::IsValid(std::string* why) const {
   if (!cloud.IsValid(why) || !voxel.IsValid(why) || !ground.IsValid(why) ||
-      !cluster.IsValid(why) || !obstacle.IsValid(why) || !zones.IsValid(why))
+      !cluster.IsValid(why) || !obstacle.IsValid(why) || !zones.IsValid(why) ||
+      !noise.IsValid(why))
     return false;
-  if (!(k >= 0.0) || !std::isfinite(k)) return Fail(why, "k must be >= 0");
+  // k standard deviations: 2 leaves about 2.5 % of truths nearer than the safe range; 0 claims
+  // no margin at all, and beyond 10 the safe range says nothing any more.
+  if (!(k > 0.0 && k <= kMaxK)) return Fail(why, "k must be in (0, 10]");
   if (!Positive(baseline_m)) return Fail(why, "baseline_m must be > 0");
   return true;
 }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "camera/intrinsics.h"
+#include "detect/noise.h"
 
 namespace depthbias::detect {
 
@@ -15,6 +16,10 @@ struct CloudParams {
   int stride_px = 4;         // one pixel per stride × stride block (the block's centre)
   double min_range_m = 0.5;  // nearer points are ignored (below the D455's minimum depth)
   double max_range_m = 20.0; // farther points are ignored (σ_Z beyond ~1 m at 20 m)
+  // A frame whose valid samples (a depth, not 0 or the full-scale 65535, within
+  // [min_range_m, max_range_m]) are fewer than this share of the sampled pixels is blind: the
+  // camera saw too little to say the way is clear [% of the samples].
+  double min_valid_pct = 5.0;
   bool IsValid(std::string* why) const;
 };
 
@@ -44,7 +49,9 @@ struct GroundParams {
 struct ClusterParams {
   double base_tolerance_m = 0.20;   // at short range: two voxels
   double noise_k = 1.0;             // σ_Z's that two neighbours may differ by
-  double disparity_noise_px = 0.08; // σ_d (D455 outdoors: 0.05–0.1 px); f and B: the camera's
+  // σ_d of the tolerance (D455 outdoors: 0.05–0.1 px); f and B: the camera's. It is also the
+  // margin's σ_d when the recording's frames do not give one (noise.h).
+  double disparity_noise_px = 0.08;
   int min_points = 6;               // voxels; smaller clusters are noise
   bool IsValid(std::string* why) const;
 };
@@ -67,6 +74,8 @@ struct ZoneParams {
   double StoppingDistanceM() const;  // S
 };
 
+constexpr double kMaxK = 10.0;  // the largest k of a safe range
+
 struct DetectorParams {
   CloudParams cloud;
   VoxelParams voxel;
@@ -74,7 +83,11 @@ struct DetectorParams {
   ClusterParams cluster;
   ObstacleParams obstacle;
   ZoneParams zones;
-  double k = 2.0;  // safe range = corrected − k·σ
+  NoiseParams noise;  // σ_d of the margin: the unit's, from the recording's frames
+  double k = 2.0;  // safe range = min(raw, corrected − k·σ); in (0, 10]
+  // false (default): a safe range is never farther than the range the camera measured,
+  // min(raw, corrected − k·σ); true: corrected − k·σ even where the model moves it farther.
+  bool safe_beyond_raw = false;
   double baseline_m = camera::D455::kBaselineM;  // B of the noise model (the recording's)
   bool IsValid(std::string* why) const;
 };

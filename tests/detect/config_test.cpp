@@ -35,14 +35,21 @@ TEST(DetectorYaml, CommittedConfigListsTheDefaults) {
   EXPECT_EQ(p.obstacle.min_height_m, d.obstacle.min_height_m);
   EXPECT_EQ(p.zones.StoppingDistanceM(), d.zones.StoppingDistanceM());
   EXPECT_EQ(p.k, d.k);
+  EXPECT_EQ(p.cloud.min_valid_pct, d.cloud.min_valid_pct);
+  EXPECT_EQ(p.safe_beyond_raw, d.safe_beyond_raw);
 }
 
 TEST(DetectorYaml, OverridesOnlyWhatItNames) {
   DetectorParams p;
   std::string why;
-  ASSERT_TRUE(ParseDetectorYaml("zones: {speed_mps: 4}\nk: 3\n", &p, &why)) << why;
+  ASSERT_TRUE(ParseDetectorYaml("zones: {speed_mps: 4}\nk: 3\ncloud: {min_valid_pct: 12}\n"
+                                "safe_beyond_raw: true\n",
+                                &p, &why))
+      << why;
   EXPECT_EQ(p.zones.speed_mps, 4.0);
   EXPECT_EQ(p.k, 3.0);
+  EXPECT_EQ(p.cloud.min_valid_pct, 12.0);
+  EXPECT_TRUE(p.safe_beyond_raw);
   EXPECT_EQ(p.zones.decel_mps2, DetectorParams{}.zones.decel_mps2);
 }
 
@@ -57,7 +64,11 @@ TEST(DetectorYaml, BadDocumentsAreRefusedNamingTheKey) {
            {"cloud: {stride_px: 2.5}\n", "cloud.stride_px"},
            {"ground: {enabled: maybe}\n", "ground.enabled"},
            {"zones: {decel_mps2: 0}\n", "zones.decel_mps2"},
-           {"k: -1\n", "k must be"},
+           {"k: -1\n", "k must be in (0, 10]"},
+           {"k: 0\n", "k must be in (0, 10]"},
+           {"k: 10.5\n", "k must be in (0, 10]"},
+           {"cloud: {min_valid_pct: 150}\n", "cloud.min_valid_pct"},
+           {"safe_beyond_raw: 2\n", "safe_beyond_raw"},
            {"cloud: [1, 2]\n", "cloud: expected a map"},
            {"{unclosed\n", "not valid YAML"},
            {"", "empty"},

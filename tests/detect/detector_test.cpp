@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "detect/json.h"
@@ -161,7 +162,8 @@ TEST(ObstacleDetector, RefusesBadParametersAndFramesOfAnotherSize) {
   const FrameDetections d = detector.Detect(small, 0);
   EXPECT_FALSE(d.success);
   EXPECT_NE(d.message.find("640x360"), std::string::npos) << d.message;
-  // An empty frame is a frame without obstacles.
+  // An empty frame holds no obstacle, and it is blind: the camera saw nothing, so nothing is
+  // clear.
   records::DepthFrame empty;
   empty.width = 1280;
   empty.height = 720;
@@ -169,6 +171,108 @@ TEST(ObstacleDetector, RefusesBadParametersAndFramesOfAnotherSize) {
   const FrameDetections none = detector.Detect(empty, 1);
   EXPECT_TRUE(none.success);
   EXPECT_TRUE(none.obstacles.empty());
+  EXPECT_TRUE(none.blind);
+  EXPECT_EQ(none.zone, Zone::kStop);
+}
+
+// A frame is blind when its valid samples are fewer than cloud.min_valid_pct of them (5 % by
+// default): a wall at 4 m in the top rows of the samples only, 8 of 180 sample rows (4.4 %)
+// or 10 (5.6 %). Full-scale counts (65535) are no depth.
+TEST(ObstacleDetector, AFrameThatShowsTooLittleIsBlindAndNeverClear) {
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  const auto& s = bias.Scenario("daylight", "HD");
+  const camera::Intrinsics in = camera::D455::DepthIntrinsics();
+  const auto wall_rows = [&](int sample_rows, std::uint16_t rest) {
+    records::DepthFrame f;
+    f.width = in.width;
+    f.height = in.height;
+    f.counts.assign(static_cast<size_t>(in.width) * in.height, rest);
+    for (int v = 0; v < 4 * sample_rows; ++v)
+      for (int u = 0; u < in.width; ++u) f.counts[static_cast<size_t>(v * in.width + u)] = 4000;
+    return f;
+  };
+  ObstacleDetector detector(in, DetectorParams{}, s);
+  const FrameDetections few = detector.Detect(wall_rows(8, 0), 0);
+  EXPECT_NEAR(few.valid_pct, 100.0 * 8 / 180, 1e-9);
+  EXPECT_TRUE(few.blind);
+  EXPECT_EQ(few.zone, Zone::kStop);
+  for (const auto& o : few.obstacles) EXPECT_EQ(o.zone, Zone::kStop);
+  const FrameDetections enough = detector.Detect(wall_rows(10, 0xFFFF), 1);
+  EXPECT_NEAR(enough.valid_pct, 100.0 * 10 / 180, 1e-9);
+  EXPECT_FALSE(enough.blind);
+  // The share is a parameter.
+  DetectorParams lenient;
+  lenient.cloud.min_valid_pct = 4.0;
+  ObstacleDetector detector2(in, lenient, s);
+  EXPECT_FALSE(detector2.Detect(wall_rows(8, 0), 0).blind);
+  lenient.cloud.min_valid_pct = 101.0;
+  std::string why;
+  EXPECT_FALSE(lenient.IsValid(&why));
+  EXPECT_NE(why.find("min_valid_pct"), std::string::npos) << why;
+  // An empty scene seen whole is clear.
+  const auto p = testing::Scene({});
+  ObstacleDetector open(p.sensor.intrinsics, DetectorParams{}, s);
+  const FrameDetections clear = open.Detect(testing::Render(p, 1)[0], 0);
+  EXPECT_FALSE(clear.blind);
+  EXPECT_EQ(clear.zone, Zone::kClear);
+}
+
+// A unit whose correction moves readings farther (it reads near: disparity offset +0.25 px):
+// the safe range is never farther than the range the camera measured, unless asked.
+TEST(ObstacleDetector, SafeRangeIsNeverBeyondTheRawRangeUnlessAsked) {
+  const double delta_px = 0.25;  // targets read nearer than they are
+  const auto p = testing::Scene({Person(8, -10), Person(12, 10)},
+                                {{"disparity_offset", {{"delta_px", delta_px}}}});
+  const model::BiasModel bias(testing::Weights(delta_px, 1.0, 0.005, 1e-5));
+  const model::ScenarioModel& s = bias.Scenario("daylight", "HD");
+  const auto frame = testing::Render(p, 1)[0];
+  ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{}, s);
+  DetectorParams beyond;
+  beyond.safe_beyond_raw = true;
+  ObstacleDetector allowed(p.sensor.intrinsics, beyond, s);
+  const FrameDetections d = detector.Detect(frame, 0), a = allowed.Detect(frame, 0);
+  ASSERT_EQ(d.obstacles.size(), a.obstacles.size());
+  for (const auto& [range, azimuth] : std::vector<std::pair<double, double>>{{8, -10}, {12, 10}}) {
+    const DetectedObstacle* o = Near(d, range - 0.4, azimuth);
+    ASSERT_NE(o, nullptr) << range;
+    ASSERT_GT(o->corrected_range_m - 2.0 * o->std_m, o->range_m) << "the model moves it farther";
+  }
+  for (size_t i = 0; i < d.obstacles.size(); ++i) {
+    const DetectedObstacle& o = d.obstacles[i];
+    EXPECT_EQ(o.safe_range_m, std::min(o.range_m, o.corrected_range_m - 2.0 * o.std_m));
+    EXPECT_LE(o.safe_range_m, o.range_m);
+    EXPECT_DOUBLE_EQ(a.obstacles[i].safe_range_m, o.corrected_range_m - 2.0 * o.std_m);
+  }
+  EXPECT_NE(FormatJsonLine(a, true).find("\"safe_beyond_raw\": true"), std::string::npos);
+  EXPECT_EQ(FormatJsonLine(d).find("safe_beyond_raw"), std::string::npos);
+}
+
+// The margin's σ_d is the recording's own: the temporal spread at the obstacles of consecutive
+// frames recovers the simulated sensor's disparity noise, High Accuracy's and High Density's
+// alike (not the configured 0.08 px); frames that do not follow each other give no pair.
+TEST(ObstacleDetector, TemporalSpreadAtTheObstaclesGivesTheUnitsDisparityNoise) {
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  for (const double sigma_px : {0.05, 0.15}) {
+    auto p = testing::Scene({Person(5, -10), Person(9, 15), Bush(7, 0)});
+    p.sensor.fallback.sigma_d_px = sigma_px;
+    ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{},
+                              bias.Scenario("daylight", "HD"));
+    const auto frames = testing::Render(p, 8);
+    for (size_t k = 0; k < frames.size(); ++k) detector.Detect(frames[k], k);
+    const TemporalNoise& t = detector.temporal_noise();
+    EXPECT_GT(t.pairs(), 1000) << sigma_px;
+    // Within 15 %: the subpixel step (1/32 px) and the millimetre depth units add a little.
+    EXPECT_NEAR(t.SigmaPx(), sigma_px, 0.15 * sigma_px);
+    detector.ResetTemporalNoise();
+    EXPECT_EQ(t.pairs(), 0);
+    detector.Detect(frames[0], 0);
+    detector.Detect(frames[1], 5);  // not the next frame
+    EXPECT_EQ(t.pairs(), 0);
+    // The margin takes what it is given.
+    detector.SetDisparityNoisePx(sigma_px);
+    EXPECT_EQ(detector.Detect(frames[2], 6).disparity_noise_px, sigma_px);
+    EXPECT_THROW(detector.SetDisparityNoisePx(0.0), std::invalid_argument);
+  }
 }
 
 TEST(Zones, StoppingDistanceAndZones) {
@@ -222,6 +326,43 @@ TEST(JsonLine, HoldsTheFieldsOfDesignMd) {
   EXPECT_EQ(a["zone"].as<std::string>(), "clear");
   EXPECT_EQ(a["points"].as<int>(), 321);
   EXPECT_NE(line.find("\"std_m\": null"), std::string::npos) << line;  // not NaN: JSON has none
+  EXPECT_EQ(n["status"].as<std::string>(), "ok");
+  EXPECT_EQ(n["zone"].as<std::string>(), "clear");
+}
+
+// Numbers written are the numbers computed: whatever their magnitude, read back they are the
+// same to 6 significant digits (a 64-byte buffer once turned 1e308 into -7.3e61), and a
+// timestamp keeps its microseconds.
+TEST(JsonLine, NumbersKeepTheirMagnitude) {
+  FrameDetections d;
+  d.timestamp_s = 1732412345.678901;
+  d.valid_pct = 37.5;
+  d.blind = true;
+  d.zone = Zone::kStop;
+  DetectedObstacle o;
+  o.centroid_m = {-1e-300, 2.5e-7, 1e300};
+  o.range_m = 1e308;
+  o.corrected_range_m = -1e308;
+  o.std_m = 123456789.0;
+  o.safe_range_m = -7.25e61;
+  d.obstacles = {o};
+  const std::string line = FormatJsonLine(d);
+  const YAML::Node n = YAML::Load(line);
+  EXPECT_NEAR(n["timestamp_s"].as<double>(), 1732412345.678901, 1e-6) << line;
+  EXPECT_EQ(n["status"].as<std::string>(), "blind");
+  EXPECT_EQ(n["valid_pct"].as<double>(), 37.5);
+  EXPECT_EQ(n["zone"].as<std::string>(), "stop");
+  const YAML::Node a = n["obstacles"][0];
+  const auto same = [](double written, double computed) {
+    return std::fabs(written - computed) <= 1e-5 * std::fabs(computed);
+  };
+  EXPECT_TRUE(same(a["centroid_m"][0].as<double>(), -1e-300)) << line;
+  EXPECT_TRUE(same(a["centroid_m"][1].as<double>(), 2.5e-7)) << line;
+  EXPECT_TRUE(same(a["centroid_m"][2].as<double>(), 1e300)) << line;
+  EXPECT_TRUE(same(a["range_m"].as<double>(), 1e308)) << line;
+  EXPECT_TRUE(same(a["corrected_range_m"].as<double>(), -1e308)) << line;
+  EXPECT_TRUE(same(a["std_m"].as<double>(), 123456789.0)) << line;
+  EXPECT_TRUE(same(a["safe_range_m"].as<double>(), -7.25e61)) << line;
 }
 
 }  // namespace
