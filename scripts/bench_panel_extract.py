@@ -18,12 +18,18 @@ Each runs in its own process, so its peak memory (ru_maxrss from wait4) is its o
                   pip if missing (an optional benchmark dependency, not needed by the tests).
                   Run on the first --python-frames frames, frames/s from those.
 
+Hole fill (lib/panel/hole_fill.h), OpenCV's (default) beside the four directional sweeps, on the
+same inputs in one run: panel_extract with `hole_fill: opencv` and with `hole_fill: sweeps` on the
+300-frame recording and, with --field-bags DIR (the bags of make_field_bags.py, e.g.
+build/field_bags), on every field scene; the rows compared column by column (identical, or the
+largest difference per column) and the wall times side by side. --hole-fill-only runs just that.
+
 Targets: panel_extract >= 300 frames/s, no slower than (a), >= 20x faster than (b), peak
 memory <= 500 MB.
 
 Usage: bench_panel_extract.py [--bin build/apps] [--work build/bench_panel] [--frames 300]
                               [--python-frames 20] [--repeat 3] [--compression none|lz4|both]
-                              [--no-python]
+                              [--no-python] [--field-bags DIR] [--hole-fill-only]
 """
 import argparse
 import json
@@ -116,6 +122,9 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--compression", choices=["none", "lz4", "both"], default="both")
     ap.add_argument("--no-python", action="store_true", help="skip the Python + Open3D peer")
+    ap.add_argument("--field-bags", help="field-scene bags (make_field_bags.py) for the hole fill")
+    ap.add_argument("--hole-fill-only", action="store_true",
+                    help="only the hole fill comparison (OpenCV beside the sweeps)")
     ap.add_argument("--peer", help=argparse.SUPPRESS)
     ap.add_argument("--file", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -125,16 +134,98 @@ def main():
         return peer_python(args.file, args.python_frames)
 
     os.makedirs(args.work, exist_ok=True)
-    if not args.no_python and subprocess.call([sys.executable, "-c", "import open3d"],
-                                              stderr=subprocess.DEVNULL):
+    if not (args.no_python or args.hole_fill_only) and subprocess.call(
+            [sys.executable, "-c", "import open3d"], stderr=subprocess.DEVNULL):
         print("bench: pip installing open3d (optional benchmark dependency)", flush=True)
         subprocess.check_call([sys.executable, "-m", "pip", "install", "-q",
                                "--disable-pip-version-check", "open3d"])
     kinds = ["none", "lz4"] if args.compression == "both" else [args.compression]
     ok = True
-    for kind in kinds:
-        ok &= bench_one(args, kind)
+    if not args.hole_fill_only:
+        for kind in kinds:
+            ok &= bench_one(args, kind)
+    bag = make_bench_bag(args, kinds[0])
+    compare_hole_fill(args, "300-frame recording", [bag], None)
+    if args.field_bags:
+        bags = sorted(os.path.join(args.field_bags, f) for f in os.listdir(args.field_bags)
+                      if f.endswith(".bag"))
+        manifest = os.path.join(args.field_bags, "manifest.csv")
+        compare_hole_fill(args, "field scenes (%d bags)" % len(bags), bags,
+                          manifest if os.path.exists(manifest) else None)
     return 0 if ok else 1
+
+
+def read_rows(path):
+    import csv
+    with open(path) as f:
+        return {r["bag"]: r for r in csv.DictReader(f)}
+
+
+def compare_hole_fill(args, what, bags, manifest):
+    """panel_extract with hole_fill: opencv and sweeps on the same bags (one process each, best of
+    --repeat wall times); the rows compared column by column."""
+    work = os.path.join(args.work, "hole_fill")
+    os.makedirs(work, exist_ok=True)
+    tool = os.path.join(args.bin, "panel_extract")
+    rows, times = {}, {}
+    for method in ("opencv", "sweeps"):
+        cfg = os.path.join(work, method + ".yaml")
+        with open(cfg, "w") as f:
+            f.write("hole_fill: %s\n" % method)
+        out = os.path.join(work, "%s.csv" % method)
+        cmd = [tool, "--quiet", "--config", cfg, "--out", out]
+        if manifest:
+            cmd += ["--manifest", manifest]
+        best = None
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            code = subprocess.call(cmd + bags, stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
+            wall = time.perf_counter() - t0
+            if code not in (0, 1):
+                sys.exit("failed (%d): %s" % (code, " ".join(cmd)))
+            best = wall if best is None else min(best, wall)
+        rows[method], times[method] = read_rows(out), best
+    a, b = rows["opencv"], rows["sweeps"]
+    identical = sum(1 for k in a if k in b and a[k] == b[k])
+    print("hole fill on the %s, %d cores, load %.1f, best of %d runs" %
+          (what, os.cpu_count(), os.getloadavg()[0], args.repeat))
+    print("%-28s %9s" % ("", "seconds"))
+    print("%-28s %9.3f" % ("panel_extract, opencv", times["opencv"]))
+    print("%-28s %9.3f   (%.2fx the OpenCV time)" % ("panel_extract, sweeps", times["sweeps"],
+                                                   times["sweeps"] / times["opencv"]))
+    print("rows identical: %d of %d" % (identical, len(a)))
+    diffs = {}
+    for k in a:
+        if k not in b:
+            continue
+        for col, va in a[k].items():
+            vb = b[k].get(col)
+            if va == vb:
+                continue
+            try:
+                d = abs(float(va) - float(vb))
+            except (TypeError, ValueError):
+                d = float("inf")
+            if d > diffs.get(col, (0, ""))[0]:
+                diffs[col] = (d, k)
+    for col, (d, k) in sorted(diffs.items()):
+        print("  %-18s max |opencv - sweeps| %.6g (%s)" % (col, d, k))
+    print()
+
+
+def make_bench_bag(args, kind):
+    work = os.path.join(args.work, kind)
+    os.makedirs(work, exist_ok=True)
+    bag = os.path.join(work, "bench_panel.bag")
+    truth_file = os.path.join(work, "bench_panel.truth.json")
+    if not os.path.exists(truth_file) or json.load(open(truth_file))["frames"] != args.frames:
+        cmd = [sys.executable, os.path.join(HERE, "make_panel_bags.py"), work, "--bench",
+               str(args.frames)]
+        if kind == "none":
+            cmd.append("--uncompressed")
+        subprocess.check_call(cmd)
+    return bag
 
 
 def best_of(n, cmd):
@@ -147,15 +238,7 @@ def best_of(n, cmd):
 
 def bench_one(args, kind):
     work = os.path.join(args.work, kind)
-    os.makedirs(work, exist_ok=True)
-    bag = os.path.join(work, "bench_panel.bag")
-    truth_file = os.path.join(work, "bench_panel.truth.json")
-    if not os.path.exists(truth_file) or json.load(open(truth_file))["frames"] != args.frames:
-        cmd = [sys.executable, os.path.join(HERE, "make_panel_bags.py"), work, "--bench",
-               str(args.frames)]
-        if kind == "none":
-            cmd.append("--uncompressed")
-        subprocess.check_call(cmd)
+    bag = make_bench_bag(args, kind)
     with open(bag, "rb") as f:  # page cache, the same for everyone
         while f.read(1 << 24):
             pass

@@ -24,6 +24,11 @@ class DepthAccumulator {
   int height() const { return height_; }
   std::uint64_t frames() const { return frames_; }
   std::uint32_t Count(std::size_t i) const { return n_[i]; }
+  double depth_units_m() const { return depth_units_m_; }
+  // Sum of pixel i's depth counts over its valid samples.
+  std::uint64_t SumCounts(std::size_t i) const {
+    return sum_[i] + (carry_.empty() ? 0 : static_cast<std::uint64_t>(carry_[i]));
+  }
   // Mean depth of pixel i over its valid samples [m]; 0 without samples.
   double MeanDepth(std::size_t i) const {
     if (n_[i] == 0) return 0.0;

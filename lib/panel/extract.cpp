@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iterator>
 #include <iomanip>
 #include <sstream>
 #include <utility>
@@ -121,19 +120,14 @@ ExtractResult ExtractPanel(FrameSource& source, const camera::Intrinsics& intrin
   if (res.region.pixels.empty())
     return Fail(&res, "no_panel", "the panel's image region is empty after the margin");
   // A pixel counts as the panel's only where the panel covers it: pixels of the rectangle in
-  // which the pooled frames show the background, the ground or an occluder are left out.
+  // which the pooled frames show the background, the ground or an occluder are left out, by the
+  // decision the simulator's metrics-only path makes too (metrics/panel_pixels.h).
   {
-    const std::vector<std::uint32_t> out = PixelsNotOnPanel(
-        rays, acc, res.region, res.detection.panel.plane,
+    metrics::PanelPixels decided = DecideRegionPixels(
+        acc, intrinsics, res.region,
         res.detection.ground_found ? &res.detection.ground : nullptr, params);
-    res.excluded_pixels = static_cast<int>(out.size());
-    if (!out.empty()) {
-      std::vector<std::uint32_t> kept;
-      kept.reserve(res.region.pixels.size() - out.size());
-      std::set_difference(res.region.pixels.begin(), res.region.pixels.end(), out.begin(),
-                          out.end(), std::back_inserter(kept));
-      res.region.pixels.swap(kept);
-    }
+    res.excluded_pixels = decided.excluded();
+    res.region.pixels.swap(decided.pixels);
   }
   if (res.region.pixels.empty())
     return Fail(&res, "no_panel", "no pixel of the panel's region shows the panel");

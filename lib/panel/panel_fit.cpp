@@ -7,14 +7,10 @@
 #include <Eigen/Cholesky>
 
 #include "camera/intrinsics.h"
+#include "panel/hole_fill.h"
 
 namespace depthbias::panel {
 namespace {
-
-// Depth noise of one sample at depth Z: σ_Z = Z²·σ_d / (f·B).
-double DepthSigma(double depth_m, double focal_px, const PanelParams& p) {
-  return depth_m * depth_m * p.expected_subpixel_rms_px / (focal_px * p.baseline_m);
-}
 
 // Grid of cells over the searched part of the plane, one count per class, with prefix sums.
 class EvidenceGrid {
@@ -74,17 +70,9 @@ PixelClass ClassifyPixel(const metrics::RayTable& rays, const DepthAccumulator& 
                          const metrics::Plane* ground, const PanelParams& p) {
   const std::uint32_t n = acc.Count(pixel);
   if (n == 0) return PixelClass::kHole;
-  const Eigen::Vector3d ray = rays.Ray(pixel);
-  const double z = acc.MeanDepth(pixel);
-  if (ground && ground->Distance(z * ray) < p.ground_distance_m) return PixelClass::kGround;
-  const double zp = plane.DepthOnRay(ray);
-  if (!std::isfinite(zp)) return PixelClass::kBehind;  // the ray misses the plane
-  const double limit =
-      p.evidence_sigma_k * DepthSigma(zp, rays.intrinsics().fx, p) / std::sqrt(n) +
-      p.plane_distance_m;
-  if (z - zp > limit) return PixelClass::kBehind;
-  if (zp - z > limit) return PixelClass::kInFront;
-  return PixelClass::kOnPlane;
+  return metrics::ClassifyMeanDepth(rays.Ray(pixel), n, acc.MeanDepth(pixel), rays.intrinsics().fx,
+                                    p.expected_subpixel_rms_px, plane, ground,
+                                    PanelPixelParamsOf(p));
 }
 
 WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& acc,
@@ -171,54 +159,11 @@ WindowFit FitPanelWindow(const metrics::RayTable& rays, const DepthAccumulator& 
   grid.Integrate();
   {
     constexpr int kFillPx = 8;
-    constexpr std::int16_t kFar = 1000;
-    // Distance to and label of the nearest labelled pixel in each of four directions.
-    std::vector<std::int16_t> dist[4];
-    std::vector<std::uint8_t> near[4];
-    for (int k = 0; k < 4; ++k) {
-      dist[k].assign(label.size(), kFar);
-      near[k].assign(label.size(), 0);
-    }
-    auto scan = [&](int k, std::size_t start, std::ptrdiff_t step, int count) {
-      std::int16_t d = kFar;
-      std::uint8_t l = 0;
-      std::size_t b = start;
-      for (int n = 0; n < count; ++n, b += step) {
-        if (label[b]) {
-          d = 0;
-          l = label[b];
-        } else if (d < kFar) {
-          ++d;
-        }
-        dist[k][b] = d;
-        near[k][b] = l;
-      }
-    };
-    for (int y = 0; y < bh; ++y) {
-      scan(0, static_cast<std::size_t>(y) * bw, 1, bw);             // from the left
-      scan(1, static_cast<std::size_t>(y) * bw + bw - 1, -1, bw);   // from the right
-    }
-    for (int x = 0; x < bw; ++x) {
-      scan(2, x, bw, bh);                                            // from above
-      scan(3, static_cast<std::size_t>(bh - 1) * bw + x, -static_cast<std::ptrdiff_t>(bw), bh);
-    }
-    for (std::size_t b = 0; b < label.size(); ++b) {
-      if (cell_of[b] < 0) continue;
-      std::uint8_t l = label[b];
-      if (!l) {
-        int best = kFar;
-        for (int axis = 0; axis < 2; ++axis) {
-          const int a = 2 * axis, c = a + 1;
-          if (dist[a][b] > kFillPx || dist[c][b] > kFillPx) continue;
-          const int k = dist[a][b] <= dist[c][b] ? a : c;
-          if (dist[k][b] < best) {
-            best = dist[k][b];
-            l = near[k][b];
-          }
-        }
-      }
-      if (l) area_grid.Add(cell_of[b] % ns, cell_of[b] / ns, static_cast<PixelClass>(l - 1));
-    }
+    const std::vector<std::uint8_t> filled = FillEnclosedHoles(
+        label, bw, bh, kFillPx, p.hole_fill == "sweeps" ? HoleFill::kSweeps : HoleFill::kOpenCv);
+    for (std::size_t b = 0; b < filled.size(); ++b)
+      if (cell_of[b] >= 0 && filled[b])
+        area_grid.Add(cell_of[b] % ns, cell_of[b] / ns, static_cast<PixelClass>(filled[b] - 1));
   }
   area_grid.Integrate();
 
@@ -397,18 +342,27 @@ WindowFit FitAndRefinePanel(const metrics::RayTable& rays, const DepthAccumulato
   return fit;
 }
 
-std::vector<std::uint32_t> PixelsNotOnPanel(const metrics::RayTable& rays,
-                                            const DepthAccumulator& acc,
-                                            const metrics::PanelRegion& region,
-                                            const metrics::Plane& plane,
-                                            const metrics::Plane* ground,
-                                            const PanelParams& p) {
-  std::vector<std::uint32_t> out;
-  for (std::uint32_t i : region.pixels) {
-    const PixelClass c = ClassifyPixel(rays, acc, i, plane, ground, p);
-    if (c != PixelClass::kHole && c != PixelClass::kOnPlane) out.push_back(i);
-  }
-  return out;
+metrics::PanelPixelParams PanelPixelParamsOf(const PanelParams& p) {
+  metrics::PanelPixelParams q;
+  q.baseline_m = p.baseline_m;
+  q.expected_subpixel_rms_px = p.expected_subpixel_rms_px;
+  q.sigma_k = p.evidence_sigma_k;
+  q.plane_distance_m = p.plane_distance_m;
+  q.ground_distance_m = p.ground_distance_m;
+  q.refit_iterations = p.refine_iterations;
+  q.pooled_frames = p.detection_frames;
+  return q;
+}
+
+metrics::PanelPixels DecideRegionPixels(const DepthAccumulator& acc,
+                                        const camera::Intrinsics& intrinsics,
+                                        const metrics::PanelRegion& region,
+                                        const metrics::Plane* ground, const PanelParams& p) {
+  std::vector<metrics::PooledPixel> pooled(region.pixels.size());
+  for (std::size_t k = 0; k < pooled.size(); ++k)
+    pooled[k] = {acc.Count(region.pixels[k]), acc.SumCounts(region.pixels[k])};
+  return metrics::DecidePanelPixels(intrinsics, region, pooled, acc.depth_units_m(), ground,
+                                    PanelPixelParamsOf(p));
 }
 
 }  // namespace depthbias::panel

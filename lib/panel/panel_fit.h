@@ -23,12 +23,13 @@
 #include <Eigen/Core>
 
 #include "metrics/geometry.h"
+#include "metrics/panel_pixels.h"
 #include "panel/detect.h"
 #include "panel/params.h"
 
 namespace depthbias::panel {
 
-enum class PixelClass : std::uint8_t { kHole, kOnPlane, kBehind, kInFront, kGround };
+using metrics::PixelClass;
 
 // Classifies one pixel of the accumulated image against the plane: depth residual against the
 // noise of the pixel's mean (evidence_sigma_k·σ_Z(Z)/√n + plane_distance_m). ground may be null.
@@ -58,14 +59,14 @@ WindowFit FitAndRefinePanel(const metrics::RayTable& rays, const DepthAccumulato
                             const metrics::Plane* ground, const Eigen::Vector3d& seed_m,
                             const PanelParams& params, double* plane_rms_m);
 
-// Pixels of region that the accumulated frames show to be something else than the panel
-// (background, ground or an occluder): a pixel counts as the panel's only where the panel
-// covers it. Sorted.
-std::vector<std::uint32_t> PixelsNotOnPanel(const metrics::RayTable& rays,
-                                            const DepthAccumulator& acc,
-                                            const metrics::PanelRegion& region,
-                                            const metrics::Plane& plane,
-                                            const metrics::Plane* ground,
-                                            const PanelParams& params);
+// The one decision of the panel's pixels (metrics/panel_pixels.h) with the panel's parameters.
+metrics::PanelPixelParams PanelPixelParamsOf(const PanelParams& params);
+
+// The panel's pixels of region, decided from the accumulated frames by the same function as the
+// simulator's metrics-only path (metrics::DecidePanelPixels). ground may be null.
+metrics::PanelPixels DecideRegionPixels(const DepthAccumulator& acc,
+                                        const camera::Intrinsics& intrinsics,
+                                        const metrics::PanelRegion& region,
+                                        const metrics::Plane* ground, const PanelParams& params);
 
 }  // namespace depthbias::panel

@@ -85,6 +85,12 @@ const std::map<std::string, Setter>& Table() {
       {"window_distance_m", D(&PanelParams::window_distance_m)},
       {"window_angle_deg", D(&PanelParams::window_angle_deg)},
       {"region_margin_px", D(&PanelParams::region_margin_px)},
+      {"hole_fill",
+       [](PanelParams* p, const std::string& t) {
+         if (t != "opencv" && t != "sweeps") return false;
+         p->hole_fill = t;
+         return true;
+       }},
       {"seed", [](PanelParams* p, const std::string& t) {
          double v;
          if (!ParseDouble(t, &v) || v < 0 || v != std::floor(v) || v > 1.8e19) return false;
@@ -141,6 +147,8 @@ bool PanelParams::IsValid(std::string* why) const {
     return fail("search window sizes must not be negative");
   if (!(region_margin_px >= 0 && region_margin_px < 20))
     return fail("region_margin_px must be in [0, 20)");
+  if (hole_fill != "opencv" && hole_fill != "sweeps")
+    return fail("hole_fill must be opencv or sweeps");
   return true;
 }
 

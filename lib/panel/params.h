@@ -68,6 +68,10 @@ struct PanelParams {
   // per on-plane pixel in the one-pixel band just outside the window's sides and top
   double edge_weight = 20.0;
   double search_extent = 0.75;
+  // How the holes enclosed by observations take the nearest observation's class
+  // (panel/hole_fill.h): "opencv" (cv::distanceTransform, DIST_LABEL_PIXEL) or "sweeps" (four
+  // directional sweeps, kept for comparison: lib/panel/README.md).
+  std::string hole_fill = "opencv";
   // A panel is solid and stands free: a candidate is refused when more than max_see_through of
   // its window's observed pixels show the background or the ground, when the plane continues on
   // three or four sides of a ring ring_width_frac·size wide around the window (a wall, a hedge;

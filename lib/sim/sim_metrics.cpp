@@ -48,6 +48,11 @@ bool MetricsParams::IsValid(std::string* why) const {
     if (why) *why = "region_margin_px must be in [0, 100]";
     return false;
   }
+  std::string region_why;
+  if (!region.IsValid(&region_why)) {
+    if (why) *why = "region: " + region_why;
+    return false;
+  }
   if (frames < 0) {
     if (why) *why = "frames must be >= 0";
     return false;
@@ -89,12 +94,70 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   const StereoSim sim(params, cell, window);
   result.truth = sim.truth();
   metrics::PanelRegion region;
-  const PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region);
+  PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region);
+  if (pixels.empty()) {
+    m.region_px = 0;
+    m.status = "no_panel";
+    m.message = "the panel's image region is empty";
+    return result;
+  }
+
+  // The first pooled frames decide the panel's pixels, as panel_extract's pooled frames do; they
+  // are kept and measured, the rest rendered on the decided pixels alone.
+  const std::size_t n_px = pixels.size();
+  const int pooled_frames =
+      mp.region.pooled_frames > 0 ? std::min(mp.region.pooled_frames, frames) : frames;
+  const bool decide = !(params.departures.region_spill_px > 0);
+  std::vector<std::uint16_t> stored(decide ? static_cast<std::size_t>(pooled_frames) * n_px : 0);
+  std::vector<std::uint16_t> counts;
+  int rendered = 0;
+  if (decide) {
+    std::vector<metrics::PooledPixel> pooled(n_px);
+    for (; rendered < pooled_frames; ++rendered) {
+      sim.RenderPixels(rendered, pixels, &counts);
+      std::copy(counts.begin(), counts.end(), stored.begin() + rendered * n_px);
+      for (std::size_t k = 0; k < n_px; ++k) {
+        pooled[k].count += counts[k] != 0;
+        pooled[k].sum_counts += counts[k];
+      }
+    }
+    const Eigen::Matrix3d level = LevelFromCamera(params.protocol.scene);
+    metrics::Plane ground;
+    ground.normal = level.transpose() * Eigen::Vector3d(0, -1, 0);
+    ground.offset_m = params.protocol.scene.camera_height_m;
+    metrics::PanelPixels decided =
+        metrics::DecidePanelPixels(in, region, pooled, s.depth_units_m, &ground, mp.region);
+    if (decided.excluded() > 0) {
+      // Keep the decided pixels' positions in the region, the stored frames and the pixel list.
+      std::vector<std::size_t> keep;
+      keep.reserve(decided.pixels.size());
+      for (std::size_t k = 0, j = 0; k < n_px && j < decided.pixels.size(); ++k)
+        if (region.pixels[k] == decided.pixels[j]) {
+          keep.push_back(k);
+          ++j;
+        }
+      PixelList kept;
+      kept.window.reserve(keep.size());
+      kept.image.reserve(keep.size());
+      for (std::size_t k : keep) {
+        kept.window.push_back(pixels.window[k]);
+        kept.image.push_back(pixels.image[k]);
+      }
+      std::vector<std::uint16_t> kept_stored(static_cast<std::size_t>(pooled_frames) *
+                                             keep.size());
+      for (int f = 0; f < pooled_frames; ++f)
+        for (std::size_t q = 0; q < keep.size(); ++q)
+          kept_stored[f * keep.size() + q] = stored[f * n_px + keep[q]];
+      pixels = std::move(kept);
+      stored.swap(kept_stored);
+      region.pixels.swap(decided.pixels);
+    }
+  }
   result.region_px = static_cast<int>(pixels.size());
   m.region_px = static_cast<double>(pixels.size());
   if (pixels.empty()) {
     m.status = "no_panel";
-    m.message = "the panel's image region is empty";
+    m.message = "no pixel of the panel's region shows the panel";
     return result;
   }
 
@@ -103,8 +166,10 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   kp.baseline_m = s.baseline_m;
   kp.region_margin_px = mp.region_margin_px;
   metrics::RegionMetrics kernel(in, region, kp);
-  std::vector<std::uint16_t> counts;
-  for (int k = 0; k < frames; ++k) {
+  for (int k = 0; k < rendered; ++k)
+    kernel.AddRegionCounts(stored.data() + static_cast<std::size_t>(k) * pixels.size(),
+                           s.depth_units_m);
+  for (int k = rendered; k < frames; ++k) {
     sim.RenderPixels(k, pixels, &counts);
     kernel.AddRegionCounts(counts.data(), s.depth_units_m);
   }

@@ -6,14 +6,21 @@
 
 #include <vector>
 
+#include "metrics/panel_pixels.h"
 #include "records/panel_metrics.h"
 #include "sim/stereo_sim.h"
 
 namespace depthbias::sim {
 
 // Options of the metrics-only path.
+// The region measured is decided as panel_extract decides it: the panel's rectangle shrunk by
+// region_margin_px, less the pixels that the first `region.pooled_frames` frames show to be
+// something else than the panel (metrics::DecidePanelPixels, with panel_extract's default
+// parameters). Under the region_spill effect the region is drawn, not decided (by hand, or a
+// detector's box with a margin): its pixels are all measured.
 struct MetricsParams {
   double region_margin_px = 0.5;  // panel rectangle shrunk by this many pixel footprints a side
+  metrics::PanelPixelParams region;  // the decision of the panel's pixels
   int frames = 0;            // 0: the protocol's
   int threads = 1;           // recordings evaluated in parallel (results do not depend on it)
 

@@ -1,0 +1,158 @@
+#include "metrics/panel_pixels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <Eigen/Cholesky>
+
+namespace depthbias::metrics {
+namespace {
+
+// Inverse-depth plane 1/Z = k·(x/z, y/z, 1) of the pixels' means, each weighted by its samples;
+// false when fewer than 3 pixels or a degenerate system.
+bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
+                          const std::vector<double>& mean_m, const std::vector<double>& weight,
+                          const std::vector<std::uint8_t>& use, Plane* plane) {
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  int used = 0;
+  for (std::size_t k = 0; k < rays.size(); ++k) {
+    if (!use[k]) continue;
+    ata += weight[k] * rays[k] * rays[k].transpose();
+    atb += weight[k] / mean_m[k] * rays[k];
+    ++used;
+  }
+  if (used < 3) return false;
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+  const Eigen::Vector3d k = ldlt.solve(atb);
+  const double len = k.norm();
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12) || !std::isfinite(len) ||
+      !(len > 0))
+    return false;
+  plane->normal = -k / len;
+  plane->offset_m = 1.0 / len;
+  return true;
+}
+
+// 1.4826 × the median of |disparity residual|·√n over the used pixels: σ_d of one sample.
+double ScatterPx(const std::vector<Eigen::Vector3d>& rays, const std::vector<double>& mean_m,
+                 const std::vector<double>& weight, const std::vector<std::uint8_t>& use,
+                 const Plane& plane, double fb) {
+  std::vector<double> r;
+  r.reserve(rays.size());
+  for (std::size_t k = 0; k < rays.size(); ++k) {
+    if (!use[k]) continue;
+    const double zp = plane.DepthOnRay(rays[k]);
+    if (!std::isfinite(zp)) continue;
+    r.push_back(std::fabs(fb / mean_m[k] - fb / zp) * std::sqrt(weight[k]));
+  }
+  if (r.empty()) return 0.0;
+  const std::size_t mid = r.size() / 2;
+  std::nth_element(r.begin(), r.begin() + mid, r.end());
+  return 1.4826 * r[mid];
+}
+
+}  // namespace
+
+bool PanelPixelParams::IsValid(std::string* why) const {
+  auto fail = [&](const char* m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!(baseline_m > 0) || !std::isfinite(baseline_m)) return fail("baseline_m must be positive");
+  if (!(expected_subpixel_rms_px > 0) || !std::isfinite(expected_subpixel_rms_px))
+    return fail("expected_subpixel_rms_px must be positive");
+  if (!(sigma_k > 0) || !std::isfinite(sigma_k)) return fail("sigma_k must be positive");
+  if (!(plane_distance_m >= 0) || !std::isfinite(plane_distance_m))
+    return fail("plane_distance_m must be zero or positive");
+  if (!(ground_distance_m >= 0) || !std::isfinite(ground_distance_m))
+    return fail("ground_distance_m must be zero or positive");
+  if (refit_iterations < 0 || refit_iterations > 100)
+    return fail("refit_iterations must be in [0, 100]");
+  if (pooled_frames < 0) return fail("pooled_frames must be >= 0");
+  return true;
+}
+
+double DepartureLimitM(double plane_depth_m, std::uint32_t n, double focal_px,
+                       double subpixel_rms_px, const PanelPixelParams& p) {
+  const double sigma_z =
+      plane_depth_m * plane_depth_m * subpixel_rms_px / (focal_px * p.baseline_m);
+  return p.sigma_k * sigma_z / std::sqrt(static_cast<double>(n)) + p.plane_distance_m;
+}
+
+PixelClass ClassifyMeanDepth(const Eigen::Vector3d& ray, std::uint32_t n, double z,
+                             double focal_px, double subpixel_rms_px, const Plane& plane,
+                             const Plane* ground, const PanelPixelParams& p) {
+  if (n == 0) return PixelClass::kHole;
+  if (ground && ground->Distance(z * ray) < p.ground_distance_m) return PixelClass::kGround;
+  const double zp = plane.DepthOnRay(ray);
+  if (!std::isfinite(zp)) return PixelClass::kBehind;  // the ray misses the plane
+  const double limit = DepartureLimitM(zp, n, focal_px, subpixel_rms_px, p);
+  if (z - zp > limit) return PixelClass::kBehind;
+  if (zp - z > limit) return PixelClass::kInFront;
+  return PixelClass::kOnPlane;
+}
+
+PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& region,
+                              const std::vector<PooledPixel>& pooled, double units,
+                              const Plane* ground, const PanelPixelParams& p) {
+  PanelPixels out;
+  const std::size_t n = region.pixels.size();
+  std::vector<Eigen::Vector3d> rays(n);
+  std::vector<double> mean_m(n, 0.0), weight(n, 0.0);
+  std::vector<std::uint8_t> use(n, 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = region.pixels[k];
+    const Eigen::Vector2d r = camera::PixelToNormalized(
+        in, {static_cast<double>(i % in.width), static_cast<double>(i / in.width)});
+    rays[k] = {r.x(), r.y(), 1.0};
+    if (k < pooled.size() && pooled[k].count > 0) {
+      weight[k] = pooled[k].count;
+      mean_m[k] = static_cast<double>(pooled[k].sum_counts) / pooled[k].count * units;
+      use[k] = mean_m[k] > 0;
+    }
+  }
+  const double fb = in.fx * p.baseline_m;
+  // First plane: every observed pixel; then the pixels on it.
+  out.plane_ok = FitInverseDepthPlane(rays, mean_m, weight, use, &out.plane);
+  std::vector<std::uint8_t> observed = use;
+  auto classify = [&](std::size_t k) {
+    return ClassifyMeanDepth(rays[k], static_cast<std::uint32_t>(weight[k]), mean_m[k], in.fx,
+                             out.subpixel_rms_px, out.plane, ground, p);
+  };
+  for (int it = 0; out.plane_ok; ++it) {
+    out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px,
+                                   ScatterPx(rays, mean_m, weight, observed, out.plane, fb));
+    if (it == p.refit_iterations) break;
+    std::vector<std::uint8_t> on(n, 0);
+    for (std::size_t k = 0; k < n; ++k)
+      on[k] = observed[k] && classify(k) == PixelClass::kOnPlane;
+    Plane refit;
+    if (!FitInverseDepthPlane(rays, mean_m, weight, on, &refit)) break;
+    out.plane = refit;
+  }
+  out.pixels.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const PixelClass c = !observed[k] ? PixelClass::kHole
+                         : out.plane_ok ? classify(k)
+                                        : PixelClass::kOnPlane;
+    switch (c) {
+      case PixelClass::kHole: ++out.holes; break;
+      case PixelClass::kOnPlane: ++out.on_plane; break;
+      case PixelClass::kBehind: ++out.behind; break;
+      case PixelClass::kInFront: ++out.in_front; break;
+      case PixelClass::kGround: ++out.ground; break;
+    }
+    if (c == PixelClass::kHole || c == PixelClass::kOnPlane) out.pixels.push_back(region.pixels[k]);
+  }
+  return out;
+}
+
+PanelRegion WithPixels(const PanelRegion& region, std::vector<std::uint32_t> pixels) {
+  PanelRegion out = region;
+  out.pixels = std::move(pixels);
+  return out;
+}
+
+}  // namespace depthbias::metrics
