@@ -124,7 +124,7 @@ std::vector<ListedBag> ListBags(const std::vector<std::string>& inputs) {
     std::string why;
     if (!w.Walk(in, &why)) throw IoError(in + ": " + why);
     if (w.found.empty())
-      throw IoError(in + ": no recording (.bag, .mcap, .db3, rosbag2 folder) in this folder");
+      throw IoError(in + ": no .bag file (nor .mcap, .db3 or rosbag2 folder) in this folder");
     std::sort(w.found.begin(), w.found.end(),
               [](const ListedBag& a, const ListedBag& b) { return a.path < b.path; });
     out.insert(out.end(), w.found.begin(), w.found.end());
