@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <future>
 #include <cerrno>
 #include <cstring>
 
@@ -112,11 +113,12 @@ McapFile::McapFile(const std::string& path) : path_(path), walk_(std::make_uniqu
 }
 
 McapFile::~McapFile() {
+  ahead_.clear();  // waits for the chunks still decompressing
   if (fd_ >= 0) ::close(fd_);
 }
 
 bool McapFile::ReadRecord(std::uint64_t offset, std::uint64_t limit, std::uint8_t* op,
-                          std::vector<std::uint8_t>* content, std::string* why) {
+                          std::vector<std::uint8_t>* content, std::string* why) const {
   std::uint8_t prefix[mcap::kRecordPrefix];
   if (offset > limit || limit - offset < mcap::kRecordPrefix ||
       ::pread(fd_, prefix, sizeof prefix, static_cast<off_t>(offset)) !=
@@ -147,32 +149,66 @@ bool McapFile::ReadRecord(std::uint64_t offset, std::uint64_t limit, std::uint8_
   return true;
 }
 
-std::string McapFile::LoadChunk(const mcap::Chunk& chunk) {
+std::shared_ptr<McapFile::Loaded> McapFile::LoadAt(std::uint64_t at) const {
+  auto out = std::make_shared<Loaded>();
+  std::uint8_t op = 0;
+  mcap::Chunk chunk;
+  if (!ReadRecord(at, data_end_, &op, &out->raw, &out->error)) {
+    out->kind = BagError::Kind::kTruncated;
+    return out;
+  }
+  if (!mcap::ParseChunk(out->raw.data(), out->raw.size(), &chunk)) {
+    out->error = "chunk at " + At(at) + " is shorter than its fields say";
+    return out;
+  }
+  out->compression = chunk.compression.empty() ? "none" : chunk.compression;
   const std::uint64_t cap =
       std::min(kMaxChunkBytes, std::max(kMinChunkCap, kMaxChunkRatio * size_));
-  if (chunk.uncompressed_size > cap)
-    return "a chunk claims " + std::to_string(chunk.uncompressed_size) +
-           " bytes uncompressed, more than the reader's limit of " + std::to_string(cap);
-  const std::uint8_t* records = chunk.records;
   const std::size_t n = static_cast<std::size_t>(chunk.uncompressed_size);
-  if (chunk.compression.empty()) {
+  std::string why;
+  const std::uint8_t* records = chunk.records;
+  if (chunk.uncompressed_size > cap) {
+    why = "a chunk claims " + std::to_string(chunk.uncompressed_size) +
+          " bytes uncompressed, more than the reader's limit of " + std::to_string(cap);
+  } else if (chunk.compression.empty()) {
     if (chunk.compressed_size != chunk.uncompressed_size)
-      return "an uncompressed chunk of " + std::to_string(chunk.compressed_size) +
-             " bytes claims " + std::to_string(chunk.uncompressed_size);
+      why = "an uncompressed chunk of " + std::to_string(chunk.compressed_size) +
+            " bytes claims " + std::to_string(chunk.uncompressed_size);
   } else {
-    if (chunk_.size() < n) chunk_.resize(n);
-    const std::string why = DecompressChunk(chunk.compression, chunk.records,
-                                            static_cast<std::size_t>(chunk.compressed_size),
-                                            chunk_.data(), n);
-    if (!why.empty()) return why;
-    records = chunk_.data();
+    out->plain.resize(n);
+    why = DecompressChunk(chunk.compression, chunk.records,
+                          static_cast<std::size_t>(chunk.compressed_size), out->plain.data(), n);
+    records = out->plain.data();
   }
-  if (chunk.uncompressed_crc != 0 && Crc32(records, n) != chunk.uncompressed_crc)
-    return "a chunk's CRC does not match its records";
-  walk_->records = records;
-  walk_->size = n;
-  walk_->pos = 0;
-  return "";
+  if (why.empty() && chunk.uncompressed_crc != 0 && Crc32(records, n) != chunk.uncompressed_crc)
+    why = "a chunk's CRC does not match its records";
+  if (!why.empty()) {
+    out->error = "chunk at " + At(at) + ": " + why;
+    return out;
+  }
+  out->records = records;
+  out->size = n;
+  return out;
+}
+
+std::shared_ptr<McapFile::Loaded> McapFile::Chunk(std::uint64_t at,
+                                                   const std::set<std::uint16_t>& wanted) {
+  if (scan_pass_ || order_.empty()) return LoadAt(at);
+  // Chunks the index says hold a wanted channel, up to kChunksAhead decompressing at once
+  // (the one needed now among them), each on its own thread.
+  for (auto it = ahead_.begin(); it != ahead_.end() && it->first < at;) it = ahead_.erase(it);
+  auto next = std::lower_bound(order_.begin(), order_.end(), at);
+  for (; next != order_.end() && ahead_.size() < kChunksAhead; ++next) {
+    const auto ids = chunk_channels_.find(*next);
+    if (*next != at && ids != chunk_channels_.end() && !Overlaps(ids->second, wanted)) continue;
+    if (!ahead_.count(*next))
+      ahead_[*next] = std::async(std::launch::async, [this, off = *next] { return LoadAt(off); });
+  }
+  const auto it = ahead_.find(at);
+  if (it == ahead_.end()) return LoadAt(at);  // more than kChunksAhead ahead of the walk
+  std::shared_ptr<Loaded> loaded = it->second.get();
+  ahead_.erase(it);
+  return loaded;
 }
 
 void McapFile::ReadSummary(std::uint64_t start, std::uint64_t end) {
@@ -217,8 +253,10 @@ void McapFile::ReadSummary(std::uint64_t start, std::uint64_t end) {
     at += mcap::kRecordPrefix + n;
   }
   contents_.summary = true;
+  for (const auto& kv : chunk_channels_) order_.push_back(kv.first);  // sorted by offset
   if (!statistics) {  // counts and times only from the records themselves
     chunk_channels_.clear();
+    order_.clear();
     contents_.chunks = 0;
     contents_.compressions.clear();
     Scan();
@@ -258,6 +296,8 @@ void McapFile::Scan() {
 }
 
 void McapFile::Rewind() {
+  ahead_.clear();
+  current_.reset();
   *walk_ = Walk();
   walk_->offset = data_start_;
 }
@@ -320,21 +360,23 @@ bool McapFile::Next(const std::set<std::uint16_t>& wanted, mcap::Message* msg) {
     if (op != mcap::kChunk && op != mcap::kMessage && op != mcap::kSchema &&
         op != mcap::kChannel)
       continue;
-    if (!ReadRecord(at, data_end_, &op, &record_, &why))
-      Fail(BagError::Kind::kTruncated, why);
     if (op == mcap::kChunk) {
-      mcap::Chunk chunk;
-      if (!mcap::ParseChunk(record_.data(), record_.size(), &chunk))
-        Fail(BagError::Kind::kCorrupt, "chunk at " + At(at) + " is shorter than its fields say");
       w.chunk_offset = at;
-      const std::string bad = LoadChunk(chunk);
-      if (!bad.empty()) Fail(BagError::Kind::kCorrupt, "chunk at " + At(at) + ": " + bad);
+      current_ = Chunk(at, wanted);
+      if (!current_->error.empty()) Fail(current_->kind, current_->error);
       if (scan_pass_) {
         ++contents_.chunks;
-        contents_.compressions.insert(chunk.compression.empty() ? "none" : chunk.compression);
+        contents_.compressions.insert(current_->compression);
       }
+      w.records = current_->records;
+      w.size = current_->size;
+      w.pos = 0;
       w.in_chunk = true;
-    } else if (op == mcap::kMessage) {
+      continue;
+    }
+    if (!ReadRecord(at, data_end_, &op, &record_, &why))
+      Fail(BagError::Kind::kTruncated, why);
+    if (op == mcap::kMessage) {
       if (!mcap::ParseMessage(record_.data(), record_.size(), msg))
         Fail(BagError::Kind::kCorrupt, "message at " + At(at) + " is too short");
       if (scan_pass_ || wanted.count(msg->channel_id)) return true;
