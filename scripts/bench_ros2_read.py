@@ -46,7 +46,8 @@ def write_mcap(path, n, compression):
             w.write_message(fx.INFO, info, dict(
                 header=header, height=b1.H, width=b1.W, distortion_model="plumb_bob",
                 d=[0.0] * 5, k=[640.0, 0, 639.5, 0, 640.0, 359.5, 0, 0, 1],
-                r=[1, 0, 0, 0, 1, 0, 0, 0, 1], p=[640.0, 0, 639.5, 0, 0, 640.0, 359.5, 0, 0, 0, 1, 0],
+                r=[1, 0, 0, 0, 1, 0, 0, 0, 1],
+                p=[640.0, 0, 639.5, 0, 0, 640.0, 359.5, 0, 0, 0, 1, 0],
                 binning_x=0, binning_y=0, roi={"x_offset": 0, "y_offset": 0, "height": 0,
                                                "width": 0, "do_rectify": False}), log_time=t)
             w.write_message(fx.DEPTH, image, {

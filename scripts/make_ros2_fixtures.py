@@ -87,7 +87,8 @@ def write_rosbags(path, frames, pb, storage, with_params):
                 v = T["rcl_interfaces/msg/ParameterValue"](
                     type=2, bool_value=False, integer_value=value, double_value=0.0,
                     string_value="", byte_array_value=np.zeros(0, np.uint8),
-                    bool_array_value=np.zeros(0, np.bool_), integer_array_value=np.zeros(0, np.int64),
+                    bool_array_value=np.zeros(0, np.bool_),
+                    integer_array_value=np.zeros(0, np.int64),
                     double_array_value=np.zeros(0, np.float64), string_array_value=[])
                 return T["rcl_interfaces/msg/Parameter"](name=name, value=v)
             ev = T["rcl_interfaces/msg/ParameterEvent"](

@@ -31,7 +31,8 @@ class McapStorage : public Ros2Storage {
       if (n != c.message_counts.end()) topics_[it->second].messages += n->second;
       topic_of_[ch.id] = it->second;
     }
-    for (const std::string& s : c.compressions) compression_ += (compression_.empty() ? "" : ", ") + s;
+    for (const std::string& s : c.compressions)
+      compression_ += (compression_.empty() ? "" : ", ") + s;
   }
 
   const std::vector<Ros2Topic>& topics() const override { return topics_; }

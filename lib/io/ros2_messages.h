@@ -75,8 +75,8 @@ bool DecodeParameterEvent(const std::uint8_t* data, std::size_t size, std::strin
 
 // A depth image as a DepthFrame: 16UC1 and mono16 counts as they are, at depth_units_m (the
 // RealSense ROS 2 wrapper publishes millimetres); 32FC1 metres rounded to counts of
-// kDepthUnitsM (NaN, infinite, zero and negative depths are no depth; beyond 65.535 m too). width × height
-// is checked against the bytes the image holds before anything is allocated.
+// kDepthUnitsM (NaN, infinite, zero and negative depths are no depth; beyond 65.535 m too).
+// width × height is checked against the bytes the image holds before anything is allocated.
 bool ImageToDepthFrame(const Image& image, double depth_units_m, records::DepthFrame* out,
                        std::string* why);
 bool IsDepthEncoding(const std::string& encoding);

@@ -50,7 +50,8 @@ class SqliteStorage : public Ros2Storage {
       Fail(BagError::Kind::kNotABag, std::string("sqlite: ") + sqlite3_errmsg(db_));
     sqlite3_exec(db_, "PRAGMA query_only = 1", nullptr, nullptr, nullptr);
     std::map<std::int64_t, std::size_t> index;
-    sqlite3_stmt* s = Prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
+    sqlite3_stmt* s =
+        Prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
     int rc;
     while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
       Ros2Topic t;
