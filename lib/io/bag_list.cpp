@@ -116,8 +116,14 @@ std::vector<ListedBag> ListBags(const std::vector<std::string>& inputs) {
   std::vector<ListedBag> out;
   for (const std::string& in : inputs) {
     std::error_code ec;
-    if (!fs::is_directory(in, ec) || IsRosbag2Folder(in)) {
+    if (!fs::is_directory(in, ec)) {
       out.push_back({in, ""});
+      continue;
+    }
+    if (IsRosbag2Folder(in)) {  // named by the folder: "tp01/" (a shell's completion) is tp01
+      std::string path = in;
+      while (path.size() > 1 && path.back() == '/') path.pop_back();
+      out.push_back({path, ""});
       continue;
     }
     Walker w;
