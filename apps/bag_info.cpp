@@ -1,6 +1,8 @@
-// bag_info FILE... [--json]: what a RealSense bag holds (streams, depth intrinsics, depth units,
-// frame count and time span, recorded options, device info). Exits non-zero if any bag cannot
-// be read; with --json, such a bag gives {"file": ..., "error": ...}.
+// bag_info FILE... [--json]: what a recording holds. A RealSense ROS 1 bag: streams, depth
+// intrinsics, depth units, frame count and time span, recorded options, device info. A rosbag2
+// recording (folder with metadata.yaml, .mcap, .db3): what `ros2 bag info` prints, then the
+// depth topic, intrinsics, preset and emitter and what is missing. Exits non-zero if any cannot
+// be read; with --json, such a recording gives {"file": ..., "error": ...}.
 // --read-all also decodes every depth frame and reports the read rate (for benchmarks);
 // --partial reads a damaged bag up to the damage.
 
@@ -14,12 +16,15 @@
 #include "args.h"
 #include "io/bag.h"
 #include "io/bag_summary.h"
+#include "io/recording.h"
 
 namespace {
 
 void Usage(std::ostream& out) {
-  out << "usage: bag_info FILE... [--json] [--read-all] [--partial]\n"
-         "What a RealSense bag holds. Options (default: all off):\n"
+  out << "usage: bag_info RECORDING... [--json] [--read-all] [--partial] [--topic T]\n"
+         "What a recording holds: a RealSense ROS 1 .bag, or a rosbag2 folder (metadata.yaml),\n"
+         ".mcap or .db3. Options (default: all off):\n"
+         "  --topic T   the depth topic of a ROS 2 recording (found by type and name)\n"
          "  --json      one JSON object per bag, one per line\n"
          "  --partial   read a damaged bag up to the damage\n"
          "  --read-all  decode every depth frame and print frames/s\n"
@@ -31,6 +36,7 @@ void Usage(std::ostream& out) {
 int main(int argc, char** argv) {
   depthbias::io::PrepareRosEnvironment();
   bool json = false, read_all = false, partial = false;
+  std::string topic;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -40,6 +46,8 @@ int main(int argc, char** argv) {
       read_all = true;
     } else if (a == "--partial") {
       partial = true;
+    } else if (a == "--topic" && i + 1 < argc) {
+      topic = argv[++i];
     } else if (a == "-h" || a == "--help") {
       Usage(std::cout);
       return 0;
@@ -58,11 +66,11 @@ int main(int argc, char** argv) {
   for (const std::string& file : files) {
     try {
       const auto start = std::chrono::steady_clock::now();
-      depthbias::io::BagReader reader(file, depthbias::io::ReadOptions{partial});
+      const auto reader = depthbias::io::OpenRecording(file, {topic, partial});
       std::uint64_t frames = 0, checksum = 0;
       if (read_all) {
         depthbias::records::DepthFrame frame;
-        while (reader.Next(&frame)) {
+        while (reader->Next(&frame)) {
           ++frames;
           checksum += frame.counts[frame.counts.size() / 2];
         }
@@ -70,7 +78,7 @@ int main(int argc, char** argv) {
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (json) {
-        std::string out = depthbias::io::BagSummaryJson(reader.info());
+        std::string out = reader->SummaryJson();
         if (read_all) {
           out.pop_back();
           out += ",\"read_all\":{\"frames\":" + std::to_string(frames) +
@@ -79,8 +87,9 @@ int main(int argc, char** argv) {
         }
         std::cout << out << "\n";
       } else {
-        std::cout << depthbias::io::BagSummaryText(reader.info());
-        if (!reader.damage().empty()) std::cout << "damage:      " << reader.damage() << "\n";
+        std::cout << reader->SummaryText();
+        if (reader->format_name() == "ROS 1 bag" && !reader->damage().empty())
+          std::cout << "damage:      " << reader->damage() << "\n";
         if (read_all)
           std::printf("read-all:    %llu frames in %.3f s = %.1f frames/s (checksum %llu)\n",
                       static_cast<unsigned long long>(frames), seconds,

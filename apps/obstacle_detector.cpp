@@ -21,7 +21,7 @@
 #include "detect/detector.h"
 #include "detect/json.h"
 #include "io/atomic_file.h"
-#include "io/bag.h"
+#include "io/recording.h"
 #include "io/temp_files.h"
 #include "io/weights_yaml.h"
 #include "model/bias_model.h"
@@ -143,7 +143,8 @@ int main(int argc, char** argv) {
       throw Fail(weights_path + ": " + e.what());
     }
     const model::BiasModel& bias_model = *made;
-    io::BagReader reader(bag);
+    const std::unique_ptr<io::RecordingSource> recording = io::OpenRecording(bag);
+    io::RecordingSource& reader = *recording;
     const io::BagInfo& info = reader.info();
     if (!info.has_depth_intrinsics) throw Fail(bag + ": no camera_info for the depth stream");
     const auto option = [&](const char* name) {

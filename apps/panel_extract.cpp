@@ -28,9 +28,9 @@ namespace {
 using UsageError = std::invalid_argument;
 
 const char* kUsage =
-    "usage: panel_extract [options] BAG_OR_DIR...\n"
-    "Finds the panel in each recording (folders searched for *.bag) and writes one row of\n"
-    "panel metrics per recording. Options (default):\n"
+    "usage: panel_extract [options] RECORDING_OR_DIR...\n"
+    "Finds the panel in each recording (ROS 1 .bag; rosbag2 folder, .mcap or .db3; folders\n"
+    "searched for them) and writes one row of panel metrics per recording. Options (default):\n"
     "  --manifest CSV       ground truth per bag: distance_m, angle_deg, light (none)\n"
     "  --config YAML        panel parameters overriding the defaults (none)\n"
     "  --out FILE           metrics CSV (metrics.csv)\n"
@@ -38,10 +38,11 @@ const char* kUsage =
     "  --jobs N             recordings measured at once, 1 to 256 (1)\n"
     "  --region-mode MODE   auto|box (auto)\n"
     "  --boxes JSON         boxes of box mode {\"name.bag\": [u0, v0, u1, v1]} (none)\n"
+    "  --topic T            depth topic of ROS 2 recordings (found by type and name)\n"
     "  --quiet              no progress and no summary line (off)\n";
 
 struct Options {
-  std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto";
+  std::string manifest, config, out = "metrics.csv", panels_out, boxes, mode = "auto", topic;
   int jobs = 1;
   bool quiet = false;
   std::vector<std::string> inputs;
@@ -76,6 +77,7 @@ int main(int argc, char** argv) {
       else if (a == "--boxes") o.boxes = value();
       else if (a == "--region-mode") o.mode = value();
       else if (a == "--jobs") o.jobs = static_cast<int>(args.Number(true, 1, 256));
+      else if (a == "--topic") o.topic = value();
       else if (a == "--quiet") o.quiet = true;
       else if (args.IsHelp()) return apps::PrintHelp(kUsage);
       else if (a.rfind("--", 0) == 0) throw UsageError("unknown option " + a);
@@ -132,7 +134,7 @@ int main(int argc, char** argv) {
       r.row.status = "error";
       r.row.message = jobs[k].path + ": no box for it in " + o.boxes;
     } else {
-      r = pipeline::ExtractRecording(jobs[k].path, params, manifest.get(), box);
+      r = pipeline::ExtractRecording(jobs[k].path, params, manifest.get(), box, {o.topic});
     }
     jobs[k].row = r.row;
     jobs[k].json = r.detection_json;

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <iostream>
 #include <memory>
@@ -18,7 +19,9 @@
 #include "io/bag.h"
 #include "io/csv.h"
 #include "io/manifest.h"
+#include "io/mcap_writer.h"
 #include "io/metrics_csv.h"
+#include "io/recording.h"
 #include "io/temp_files.h"
 #include "io/yaml_limits.h"
 #include "sim/config_yaml.h"
@@ -41,6 +44,8 @@ constexpr char kUsage[] =
     "  --metrics-only       write the metrics table to --out\n"
     "  --calibrate-to CSV   fit the base sensor to a real table, write it to --out\n"
     "  --out FILE           output of --metrics-only and --calibrate-to\n"
+    "  --format F           recordings of --out-dir: bag (RealSense ROS 1) or rosbag2 (MCAP,\n"
+    "                       zstd chunks, the ROS 2 wrapper's topics) (bag)\n"
     "  --frames N           frames per recording, 1 to 100000 (the protocol's)\n"
     "  --seed S             seed of every random draw (0)\n"
     "  --effects FILE       effects YAML added to the base sensor (none)\n"
@@ -61,20 +66,21 @@ std::string Fixed(double v, int digits) {
   return buf;
 }
 
-std::string BagPath(const std::string& dir, const sim::Cell& cell) {
-  return (fs::path(dir) / (cell.name + ".bag")).string();
+// ext: ".bag" (RealSense ROS 1) or ".mcap" (rosbag2), as --format says.
+std::string BagPath(const std::string& dir, const sim::Cell& cell, const std::string& ext) {
+  return (fs::path(dir) / (cell.name + ext)).string();
 }
 
 // Before any work: the bags (and their .part) and the manifest of --out-dir are new outputs
 // (none an input, no two alike: duplicate distances in a protocol name two recordings alike),
 // the folder is writable and has room for them.
 void CheckRecordings(const sim::SimParams& params, const std::string& dir,
-                     const std::vector<std::string>& inputs) {
+                     const std::vector<std::string>& inputs, const std::string& ext) {
   std::vector<std::string> names = {"manifest.csv"};
   const std::vector<sim::Cell> cells = sim::MakeCells(params.protocol);
   for (const sim::Cell& cell : cells) {
-    names.push_back(cell.name + ".bag");
-    names.push_back(cell.name + ".bag.part");
+    names.push_back(cell.name + ext);
+    names.push_back(cell.name + ext + ".part");
   }
   const auto& in = params.sensor.intrinsics;
   const double frame_bytes = 2.0 * in.width * in.height + 2048.0;  // pixels and message
@@ -83,14 +89,30 @@ void CheckRecordings(const sim::SimParams& params, const std::string& dir,
                          (params.protocol.frames * frame_bytes + 65536.0));
 }
 
+// A recording's output through a BagWriter or an McapWriter (the same Finish / Commit contract).
+template <typename Writer>
+sim::RecordingOutput Output(std::shared_ptr<Writer> writer, const sim::Cell& cell,
+                            apps::Progress* progress, std::mutex* mutex,
+                            std::vector<std::function<void()>>* commits) {
+  {
+    std::lock_guard<std::mutex> lock(*mutex);
+    commits->push_back([writer] { writer->Commit(); });
+  }
+  return sim::RecordingOutput{[writer](const records::DepthFrame& f) { writer->Write(f); },
+                              [writer, progress, name = cell.name] {
+                                writer->Finish();
+                                progress->Step(name);
+                              }};
+}
+
 // Every recording of the protocol as a bag in dir, then DIR/manifest.csv with each recording's
 // truth. Bags stay DIR/NAME.bag.part until every recording is finished, then all are renamed
 // into place and the manifest written; the first error (or a signal) removes them all.
 void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& metrics,
-                     const std::string& dir) {
+                     const std::string& dir, const std::string& ext) {
   fs::create_directories(dir);
   std::mutex mutex;
-  std::vector<std::shared_ptr<io::BagWriter>> writers;
+  std::vector<std::function<void()>> commits;
   apps::Progress progress(sim::MakeCells(params.protocol).size());
   auto open = [&](const sim::Cell& cell) {
     io::BagWriterConfig config;
@@ -101,22 +123,18 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
     config.options["Emitter_Enabled"] = cell.emitter_on ? 1 : 0;
     config.options["Stereo_Baseline"] = params.sensor.baseline_m * 1000.0;  // [mm]
     config.device = {{"Name", "Intel RealSense D455"}, {"Serial Number", "depthbias-sim"}};
-    const auto writer = std::make_shared<io::BagWriter>(BagPath(dir, cell), config);
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      writers.push_back(writer);
-    }
-    return sim::RecordingOutput{[writer](const records::DepthFrame& f) { writer->Write(f); },
-                                [writer, &progress, name = cell.name] {
-                                  writer->Finish();
-                                  progress.Step(name);
-                                }};
+    const std::string path = BagPath(dir, cell, ext);
+    if (ext == ".mcap")
+      return Output(std::make_shared<io::McapWriter>(path, io::McapWriterConfig{config}), cell,
+                    &progress, &mutex, &commits);
+    return Output(std::make_shared<io::BagWriter>(path, config), cell, &progress, &mutex,
+                  &commits);
   };
   std::vector<io::ManifestRow> rows;
   for (const sim::RenderedRecording& r :
        sim::RenderProtocol(params, metrics, metrics.threads, open)) {
     io::ManifestRow row;
-    row.bag = r.cell.name + ".bag";
+    row.bag = r.cell.name + ext;
     row.distance_m = r.cell.distance_m;
     row.angle_deg = r.cell.angle_deg;
     row.light = r.cell.light;
@@ -139,7 +157,7 @@ void WriteRecordings(const sim::SimParams& params, const sim::MetricsParams& met
   progress.Clear();
   {
     const io::CommitScope all_or_none;  // a signal now waits for the last rename
-    for (const auto& w : writers) w->Commit();
+    for (const auto& commit : commits) commit();
     io::WriteManifest((fs::path(dir) / "manifest.csv").string(), rows,
                       {"true_depth_m", "true_range_m", "true_angle_deg", "true_hole_rate_pct"});
     if (!obstacles.empty())
@@ -170,8 +188,8 @@ void Calibrate(const sim::SimParams& params, const std::string& real_csv,
 // The camera of a real recording: its depth intrinsics (rectified: distortion is dropped, with a
 // warning if the recording has any), depth units and Stereo_Baseline.
 void SensorFromRecording(const std::string& bag, sim::SensorParams* sensor) {
-  const io::BagReader reader(bag);
-  const io::BagInfo& info = reader.info();
+  const std::unique_ptr<io::RecordingSource> reader = io::OpenRecording(bag);
+  const io::BagInfo& info = reader->info();
   if (!info.has_depth_intrinsics) throw Fail(bag + ": no camera_info for the depth stream");
   for (double c : info.depth_intrinsics.coeffs)
     if (c != 0) {
@@ -192,6 +210,7 @@ int main(int argc, char** argv) {
   io::InstallSignalCleanup();
   std::string protocol_file, sensor_file, sensor_bag, effects_file, out_dir, out, calibrate_to;
   bool metrics_only = false;
+  std::string format = "bag";
   int frames = 0;
   sim::MetricsParams mp;
   mp.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -208,6 +227,7 @@ int main(int argc, char** argv) {
       else if (a == "--out-dir") out_dir = value();
       else if (a == "--out") out = value();
       else if (a == "--calibrate-to") calibrate_to = value();
+      else if (a == "--format") format = value();
       else if (a == "--metrics-only") metrics_only = true;
       else if (a == "--frames") frames = static_cast<int>(args.Number(true, 1, kMaxFrames));
       else if (a == "--seed") params.seed = static_cast<std::uint64_t>(args.Number(true, 0, 9007199254740992.0));
@@ -216,6 +236,9 @@ int main(int argc, char** argv) {
       else throw std::invalid_argument("unknown argument '" + a + "' (see simulate --help)");
     }
     if (protocol_file.empty()) throw Fail("--protocol FILE is required");
+    if (format != "bag" && format != "rosbag2")
+      throw std::invalid_argument("--format bag|rosbag2 (see simulate --help)");
+    const std::string ext = format == "rosbag2" ? ".mcap" : ".bag";
     if ((out_dir.empty() ? 0 : 1) + metrics_only + !calibrate_to.empty() != 1)
       throw Fail("choose one of --out-dir DIR, --metrics-only, --calibrate-to real.csv");
     if ((metrics_only || !calibrate_to.empty()) && out.empty()) throw Fail("--out is required");
@@ -249,10 +272,10 @@ int main(int argc, char** argv) {
                  " frames per recording, more than " + std::to_string(kMaxFrames));
     io::CheckOutputs({out}, inputs);
     if (!out.empty()) io::CheckOutputFile(out);  // before the work, not after it
-    if (!out_dir.empty()) CheckRecordings(params, out_dir, inputs);
+    if (!out_dir.empty()) CheckRecordings(params, out_dir, inputs, ext);
 
     if (!out_dir.empty()) {
-      WriteRecordings(params, mp, out_dir);
+      WriteRecordings(params, mp, out_dir, ext);
     } else if (metrics_only) {
       std::vector<records::PanelMetrics> rows;
       for (const auto& r : sim::SimulateProtocolMetrics(params, mp)) rows.push_back(r.metrics);

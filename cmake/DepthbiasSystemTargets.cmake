@@ -41,3 +41,17 @@ if(NOT TARGET depthbias_rosbag)
     endif()
   endforeach()
 endif()
+
+# rosbag2 storage (MCAP chunks in zstd or lz4, SQLite3 .db3 files, CRC-32 of MCAP chunks) from
+# Debian's libzstd, liblz4, libsqlite3 and zlib: plain C libraries found by name.
+if(NOT TARGET depthbias_ros2_storage)
+  add_library(depthbias_ros2_storage INTERFACE IMPORTED)
+  foreach(lib zstd lz4 sqlite3 z)
+    find_library(DEPTHBIAS_LIB_${lib} NAMES ${lib})
+    if(DEPTHBIAS_LIB_${lib})
+      target_link_libraries(depthbias_ros2_storage INTERFACE ${DEPTHBIAS_LIB_${lib}})
+    else()
+      list(APPEND DEPTHBIAS_MISSING "lib${lib}.so")
+    endif()
+  endforeach()
+endif()

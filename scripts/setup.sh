@@ -20,6 +20,7 @@ DEB_PACKAGES=(
   librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev pluginlib-dev
   libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
   libroslz4-dev libbz2-dev
+  libzstd-dev liblz4-dev libsqlite3-dev zlib1g-dev
   clang libclang-rt-14-dev
   libusb-1.0-0 python3 python3-venv python3-dev
 )

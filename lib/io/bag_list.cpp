@@ -15,8 +15,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
+bool EndsWith(const std::string& name, const char* tail) {
+  const std::size_t n = std::strlen(tail);
+  return name.size() > n && name.compare(name.size() - n, n, tail) == 0;
+}
+
+// A recording file: a ROS 1 .bag, a rosbag2 .mcap or .db3.
 bool EndsWithBag(const std::string& name) {
-  return name.size() > 4 && name.compare(name.size() - 4, 4, ".bag") == 0;
+  return EndsWith(name, ".bag") || EndsWith(name, ".mcap") || EndsWith(name, ".db3");
+}
+
+// A rosbag2 recording folder: one recording, never searched into.
+bool IsRosbag2Folder(const fs::path& dir) {
+  std::error_code ec;
+  return fs::is_regular_file(dir / "metadata.yaml", ec);
 }
 
 std::string KindOf(mode_t m) {
@@ -75,6 +87,10 @@ class Walker {
       return;
     }
     if (S_ISDIR(st.st_mode)) {
+      if (IsRosbag2Folder(p)) {
+        found.push_back({path, ""});
+        return;
+      }
       if (bag) {
         found.push_back({path, "is a folder named like a bag"});
         return;
@@ -104,10 +120,17 @@ std::vector<ListedBag> ListBags(const std::vector<std::string>& inputs) {
       out.push_back({in, ""});
       continue;
     }
+    if (IsRosbag2Folder(in)) {  // named by the folder: "tp01/" (a shell's completion) is tp01
+      std::string path = in;
+      while (path.size() > 1 && path.back() == '/') path.pop_back();
+      out.push_back({path, ""});
+      continue;
+    }
     Walker w;
     std::string why;
     if (!w.Walk(in, &why)) throw IoError(in + ": " + why);
-    if (w.found.empty()) throw IoError(in + ": no .bag file in this folder");
+    if (w.found.empty())
+      throw IoError(in + ": no .bag file (nor .mcap, .db3 or rosbag2 folder) in this folder");
     std::sort(w.found.begin(), w.found.end(),
               [](const ListedBag& a, const ListedBag& b) { return a.path < b.path; });
     out.insert(out.end(), w.found.begin(), w.found.end());

@@ -1,6 +1,7 @@
 #pragma once
 // The recordings a command line names: files as given, folders searched (recursively, through
-// symbolic links to folders, each folder once) for *.bag files in name order. Nothing is
+// symbolic links to folders, each folder once) for recordings in name order: *.bag, *.mcap and
+// *.db3 files, and rosbag2 folders (a folder holding metadata.yaml is one recording). Nothing is
 // skipped silently: what the search meets and cannot read comes back with the reason, so a
 // batch reports it in its own row (status error) instead of leaving it out.
 

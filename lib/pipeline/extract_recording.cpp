@@ -5,14 +5,15 @@
 
 #include "camera/presets.h"
 #include "io/atomic_file.h"
-#include "io/bag_source.h"
+#include "io/recording.h"
 #include "panel/prefetch.h"
 
 namespace depthbias::pipeline {
 
 RecordingResult ExtractRecording(const std::string& path, const panel::PanelParams& params,
                                  const io::Manifest* manifest,
-                                 const std::optional<panel::PixelBox>& box) {
+                                 const std::optional<panel::PixelBox>& box,
+                                 const io::RecordingOptions& recording) {
   RecordingResult out;
   records::PanelMetrics& m = out.row;
   const std::string name = io::BaseName(path);
@@ -20,6 +21,7 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
   panel::ExtractResult r;
   camera::Intrinsics in;
   std::string disagree;  // where the manifest and the recording differ
+  std::string settings;  // where preset and emitter came from
   try {
     const io::ManifestRow* truth = manifest ? manifest->Find(path) : nullptr;
     if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
@@ -28,8 +30,8 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
       m.angle_deg = truth->angle_deg;
       m.light = truth->light;
     }
-    io::BagSource source(path);
-    const io::BagInfo& info = source.info();
+    const std::unique_ptr<io::RecordingSource> source = io::OpenRecording(path, recording);
+    const io::BagInfo& info = source->info();
     if (!info.has_depth_intrinsics) throw std::runtime_error("no depth intrinsics recorded");
     in = info.depth_intrinsics;
     panel::SearchWindow window;
@@ -38,6 +40,8 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
     const auto emitter = info.options.find("Emitter_Enabled");
     if (preset != info.options.end()) m.preset = camera::PresetName(preset->second);
     if (emitter != info.options.end()) m.emitter = emitter->second != 0 ? "on" : "off";
+    settings = source->settings_source();
+    if (truth && (truth->preset || truth->emitter)) settings = "manifest";
     // The manifest's word wins (it is the user's), but never silently: a disagreement with what
     // the recording says is written in the row's message.
     auto compare = [&](const std::optional<std::string>& listed, bool recorded,
@@ -54,7 +58,7 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
       if (truth->preset) m.preset = *truth->preset;
       if (truth->emitter) m.emitter = *truth->emitter;
     }
-    panel::PrefetchSource ahead(&source, 8);  // read on one core, measure on the other
+    panel::PrefetchSource ahead(source.get(), 8);  // read on one core, measure on the other
     r = panel::ExtractPanel(ahead, in, params, window, box);
     const records::PanelMetrics known = m;  // what the manifest and the bag say
     m = r.metrics;
@@ -75,7 +79,9 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
     m.message = m.message.empty() ? note : m.message + "; " + note;
   }
   r.metrics = m;
-  out.detection_json = panel::DetectionJson(r, in, "\"bag\": \"" + name + "\"");
+  out.detection_json = panel::DetectionJson(
+      r, in, "\"bag\": \"" + name + "\", \"settings_from\": \"" +
+                 (settings.empty() ? "none" : settings) + "\"");
   return out;
 }
 
