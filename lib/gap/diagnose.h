@@ -3,8 +3,12 @@
 // departs from the base simulator, which registered effect explains it, and how far the gap
 // shrinks once that effect is added, in sample and on held-out cells.
 //
-//  1. Gap: z = (real − sim) / noise per cell and compared metric, the base sensor as configured
-//     (noise from emitter on/off replicates, noise.h).
+//  1. Gap: z = (real − sim) / √(σ² + τ²) per cell and compared metric, the base sensor as
+//     configured: σ the replicate noise from the emitter on/off twins with the emitter mismatch
+//     removed (noise.h; the mismatch is reported as a gap of its own), τ the placement scatter
+//     of the cell's test point (placement.h: a random effect per test point, its law in
+//     distance by REML; test points beyond the law are flagged). Fits whiten the residuals of
+//     one test point together (fit.h).
 //  2. Where: shares of Σz² by factor and pair of factors, by metric, and the significant cells
 //     (localize.h).
 //  3. Which: the calibrated base (the sensor's σ_d and hole probability per scenario moved within
@@ -18,9 +22,17 @@
 //     (each effect's change of the metrics at a typical size, in noise units, the calibration's
 //     directions projected out) are compared pairwise: |r| ≥ confounded_r is reported as
 //     confounded, and an effect confounded with one already selected is not added.
-//  4. How far: the gap of the selected effects in sample and held out (leave one distance out by
-//     default), and the selected effects simulated at their fitted values (verification).
-//  5. What is left: the cells still significant after the selected effects.
+//     An effect confounded with the calibration is never selected: with an effect confounded
+//     with a selected one it is named as "one of {a, b}" with the size each would need.
+//  4. How far, nested: an outer hold-out (leave one distance out by default) wraps everything
+//     fitted (noise, placement, calibration, φ, scope, selection); each outer fold's selection
+//     predicts its held-out cells additively and is simulated there at its fitted values
+//     (shrink_heldout_nested_pct, shrink_simulated_pct: the headline). An effect selected on
+//     the whole table stays only if it is selected in at least half of the outer folds and
+//     the outer folds' selections gain on their held-out cells.
+//  5. What is left: the cells still significant after the selected effects; when they are,
+//     where the rest lies (factor cells), its size and its form (∝ D, ∝ D², one test point),
+//     never pinned on a registered effect that did not earn (open world).
 
 #include <string>
 #include <vector>
@@ -49,6 +61,9 @@ struct DiagnoseParams {
   double alpha = 0.05;         // significance of a cell's gap (Bonferroni over the cells)
   int max_selected = 4;        // effects forward selection may add
   bool verify = true;          // simulate the selected effects at their fitted values
+  bool placement = true;       // placement scatter as a variance component (placement.h)
+  bool nested = true;          // the outer hold-out around the whole diagnosis
+  double placement_alpha = 0.05;  // a test point beyond the law (Bonferroni over points)
 
   bool IsValid(std::string* why) const;
 };
@@ -88,6 +103,51 @@ struct SelectionStep {
   double heldout_gain = 0;
 };
 
+// One outer fold of the nested cross-validation: everything fitted without its cells.
+struct NestedFold {
+  std::string held;                    // e.g. "distance 16 m"
+  int cells = 0;
+  std::vector<std::string> selected;   // the fold's own selection
+  double deviance_calibrated = 0;      // on its held-out cells, about the fold's calibrated base
+  double deviance_selected = 0;        // and about its selection
+  bool simulated = false;
+};
+
+struct Nested {
+  bool run = false;
+  std::string message;                 // why not run, or a fold's failure
+  std::vector<NestedFold> folds;
+  std::vector<char> cells;             // held out in some fold
+  std::vector<double> z_baseline, z_calibrated, z_selected, z_simulated;  // [obs], fold units
+  GapStat baseline, calibrated, selected, simulated;
+  double shrink_heldout_nested_pct = NAN;  // baseline → selection added, held out
+  double shrink_simulated_pct = NAN;       // baseline → selection simulated, held out
+  double gain = 0;                     // Σ folds' calibrated − selected held-out deviance
+};
+
+// Effects that cannot be told apart on this table: one of them, with the size each would need.
+struct Ambiguity {
+  std::vector<std::string> effects;  // "one of {a, b}"; "calibration:sigma_d" for σ_d
+  std::vector<std::string> sizes;    // the size each would need, as text
+  double correlation = 0;
+};
+
+// The rest of the gap no registered effect earns (open world).
+struct Unexplained {
+  std::string metric;
+  std::string where;        // factor cells, e.g. "light=sunset × angle=20°"
+  std::vector<int> cells;
+  double size = 0;          // weighted mean residual over those cells, in the metric's unit
+  double size_se = 0;       // its standard error (noise and placement scatter)
+  double size_at_max = 0;   // at the largest distance of those cells (the form's value)
+  std::string unit;
+  std::string form;         // "∝ D", "∝ D²", "constant", "one test point"
+  double share_pct = 0;     // of the remaining Σz² in those cells
+  double chi2 = 0;          // Σz² of those cells
+  int df = 0;
+  double p_value = 1;
+};
+
 struct DiagnoseResult {
   bool success = false;
   std::string message;
@@ -117,6 +177,11 @@ struct DiagnoseResult {
   std::vector<double> z_verified;
   GapStat verified_in;
   std::vector<CellGap> remaining;  // cells still significant after the selected effects
+  PlacementEstimate placement;     // the scatter of the test points (empty if not estimated)
+  Nested nested;                   // the outer hold-out
+  std::vector<std::string> dropped;     // selected on the table, not earning in the outer loop
+  std::vector<Ambiguity> ambiguous;
+  std::vector<Unexplained> unexplained;
 
   // The result of the named effect alone (nullptr if it was not a candidate).
   const EffectResult* Effect(const std::string& name) const;

@@ -38,9 +38,9 @@ struct Layout {
 class GapCost : public ceres::CostFunction {
  public:
   GapCost(const GapModel& model, const std::vector<Term>& terms, const Layout& layout,
-          std::vector<size_t> obs, std::vector<std::vector<std::vector<double>>> fixed)
-      : model_(model), terms_(terms), layout_(layout), obs_(std::move(obs)),
-        fixed_(std::move(fixed)) {
+          GapModel::Whitening white, std::vector<std::vector<std::vector<double>>> fixed)
+      : model_(model), terms_(terms), layout_(layout), white_(std::move(white)),
+        obs_(white_.obs), fixed_(std::move(fixed)) {
     for (const auto& b : layout_.blocks)
       mutable_parameter_block_sizes()->push_back(b.term >= 0 ? static_cast<int>(b.axes.size())
                                                              : 2);
@@ -63,11 +63,13 @@ class GapCost : public ceres::CostFunction {
     const int k_count = model_.num_metrics();
     const double huber = model_.settings().huber_k;
     const Simulations& s = model_.sims();
+    const size_t nb_count = layout_.blocks.size();
     if (jac) {
-      for (size_t b = 0; b < layout_.blocks.size(); ++b)
+      for (size_t b = 0; b < nb_count; ++b)
         if (jac[b])
           std::fill(jac[b], jac[b] + num_residuals() * parameter_block_sizes()[b], 0.0);
     }
+    // Raw residuals y − μ and their derivatives −∂μ/∂p.
     double u[2], v[2];
     for (size_t i = 0; i < obs_.size(); ++i) {
       const size_t o = obs_[i];
@@ -80,11 +82,8 @@ class GapCost : public ceres::CostFunction {
       }
       const int nb = layout_.scenario_block[scen];
       if (nb >= 0) mu += s.jac_log_sigma[o] * p[nb][0] + s.jac_logit_p[o] * p[nb][1];
-      const double w = model_.weight(o);
-      double d = 1;
-      residuals[i] = Robust((model_.y(o) - mu) * w, huber, &d);
+      residuals[i] = model_.y(o) - mu;
       if (!jac) continue;
-      const double g = -d * w;  // ∂r̃/∂μ
       for (size_t t = 0; t < terms_.size(); ++t) {
         const int grp = model_.Group(terms_[t], cell);
         const int b = layout_.term_block[t][grp];
@@ -99,12 +98,43 @@ class GapCost : public ceres::CostFunction {
           const double up = model_.Delta(terms_[t], v, o);
           v[axes[j]] = u[axes[j]] - h;
           const double down = model_.Delta(terms_[t], v, o);
-          jac[b][i * axes.size() + j] = g * (up - down) / (2 * h);
+          jac[b][i * axes.size() + j] = -(up - down) / (2 * h);
         }
       }
       if (nb >= 0 && jac[nb]) {
-        jac[nb][i * 2] = g * s.jac_log_sigma[o];
-        jac[nb][i * 2 + 1] = g * s.jac_logit_p[o];
+        jac[nb][i * 2] = -s.jac_log_sigma[o];
+        jac[nb][i * 2 + 1] = -s.jac_logit_p[o];
+      }
+    }
+    // Whitened block by block (L⁻¹ lower triangular), then Huber's loss row by row.
+    std::vector<double> tmp(obs_.size());
+    for (size_t w = 0; w + 1 < white_.starts.size(); ++w) {
+      const int st = white_.starts[w], n = white_.starts[w + 1] - st;
+      const double* l = white_.linv[w].data();
+      auto apply = [&](double* col, size_t stride) {
+        for (int r = 0; r < n; ++r) {
+          double sum = 0;
+          for (int c = 0; c <= r; ++c) sum += l[r * n + c] * col[(st + c) * stride];
+          tmp[r] = sum;
+        }
+        for (int r = 0; r < n; ++r) col[(st + r) * stride] = tmp[r];
+      };
+      apply(residuals, 1);
+      if (!jac) continue;
+      for (size_t b = 0; b < nb_count; ++b) {
+        if (!jac[b]) continue;
+        const int size = parameter_block_sizes()[b];
+        for (int j = 0; j < size; ++j) apply(jac[b] + j, size);
+      }
+    }
+    for (size_t i = 0; i < obs_.size(); ++i) {
+      double d = 1;
+      residuals[i] = Robust(residuals[i], huber, &d);
+      if (!jac || d == 1) continue;
+      for (size_t b = 0; b < nb_count; ++b) {
+        if (!jac[b]) continue;
+        const int size = parameter_block_sizes()[b];
+        for (int j = 0; j < size; ++j) jac[b][i * size + j] *= d;
       }
     }
     size_t row = obs_.size();
@@ -124,34 +154,10 @@ class GapCost : public ceres::CostFunction {
   const GapModel& model_;
   const std::vector<Term>& terms_;
   const Layout& layout_;
-  std::vector<size_t> obs_;
+  GapModel::Whitening white_;
+  const std::vector<size_t>& obs_;
   std::vector<std::vector<std::vector<double>>> fixed_;  // [term][group][axis] coordinates
 };
-
-// The node of a (possibly 2-D) grid as axis indices.
-std::vector<int> NodeAxes(const Surface& s, int node) {
-  if (s.candidate.axes.size() == 1) return {node};
-  const int n1 = static_cast<int>(s.candidate.axes[1].nodes.size());
-  return {node / n1, node % n1};
-}
-
-// Per scenario, the calibration moves that minimize Σ (r − a·n)² + Σ (n/τ)² given residuals r
-// and the Jacobian columns a (plain squares), and the value reached.
-struct ScenarioProfile {
-  std::vector<std::array<double, 5>> normal;  // per scenario: Σa_σ², Σa_σa_p, Σa_p², Σa_σ r, Σa_p r
-  std::vector<double> rr;                     // per scenario: Σ r²
-};
-
-double ProfiledValue(const ScenarioProfile& p, int s, const FitSettings& fs, int frozen) {
-  const auto& n = p.normal[s];
-  Eigen::Matrix2d a;
-  const double held = 1e12;  // a frozen component: its move costs everything
-  a << n[0] + (frozen & 1 ? held : 1 / (fs.tau_log_sigma * fs.tau_log_sigma)), n[1], n[1],
-      n[2] + (frozen & 2 ? held : 1 / (fs.tau_logit_p * fs.tau_logit_p));
-  const Eigen::Vector2d b(n[3], n[4]);
-  const Eigen::Vector2d x = a.ldlt().solve(b);
-  return p.rr[s] - b.dot(x);  // min of rᵀr − 2bᵀx + xᵀAx
-}
 
 }  // namespace
 
@@ -165,19 +171,26 @@ bool FitSettings::IsValid(std::string* why) const {
 }
 
 GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEstimate& noise,
-                   const FitSettings& settings)
+                   const FitSettings& settings, const PlacementEstimate* placement)
     : design_(design), sims_(sims), settings_(settings) {
+  const bool blocks = placement && !placement->empty();
   const int k_count = design.num_metrics();
   const size_t n = design.real.size();
   y_ = design.real;
   sigma_.assign(n, NAN);
+  total_.assign(n, NAN);
+  block_.assign(n, -1);
   valid_.assign(n, 0);
   phi_.assign(k_count, 1.0);
   for (int c = 0; c < design.num_cells(); ++c)
     for (int k = 0; k < k_count; ++k) {
       const size_t o = static_cast<size_t>(c) * k_count + k;
       sigma_[o] = noise.Of(design, sims, c, k);
-      valid_[o] = std::isfinite(y_[o]) && std::isfinite(sims.base[o]) && sigma_[o] > 0;
+      const double tau = blocks ? placement->Tau(k, c) : 0.0;
+      total_[o] = std::sqrt(sigma_[o] * sigma_[o] + tau * tau);
+      if (blocks) block_[o] = placement->point[c];
+      valid_[o] = std::isfinite(y_[o]) && std::isfinite(sims.base[o]) && sigma_[o] > 0 &&
+                  std::isfinite(total_[o]);
     }
   for (const Surface& s : sims.surfaces) {
     std::vector<std::vector<double>> axes;
@@ -198,7 +211,44 @@ int GapModel::Frozen(const std::vector<Term>& terms) const {
 }
 
 double GapModel::weight(size_t obs) const {
-  return 1.0 / (sigma_[obs] * std::sqrt(phi_[obs % design_.num_metrics()]));
+  return 1.0 / (total_[obs] * std::sqrt(phi_[obs % design_.num_metrics()]));
+}
+
+GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
+  const int k_count = num_metrics();
+  Whitening w;
+  w.obs = obs;
+  // Block key: (test point, metric); a recording without one stands alone.
+  auto key = [&](size_t o) {
+    return block_[o] < 0 ? std::make_pair(-1 - static_cast<long long>(o), 0)
+                         : std::make_pair(static_cast<long long>(block_[o]),
+                                          static_cast<int>(o % k_count));
+  };
+  std::stable_sort(w.obs.begin(), w.obs.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
+  for (size_t i = 0; i < w.obs.size();) {
+    size_t j = i;
+    while (j < w.obs.size() && key(w.obs[j]) == key(w.obs[i])) ++j;
+    const int n = static_cast<int>(j - i);
+    Eigen::MatrixXd cov(n, n);
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c < n; ++c) {
+        const size_t a = w.obs[i + r], b = w.obs[i + c];
+        const double phi = phi_[a % k_count];
+        const double ta = placement(a), tb = placement(b);
+        cov(r, c) = phi * (ta * tb + (r == c ? sigma_[a] * sigma_[a] : 0.0));
+      }
+    const Eigen::MatrixXd l = cov.llt().matrixL();
+    const Eigen::MatrixXd linv =
+        l.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(n, n));
+    std::vector<double> flat(static_cast<size_t>(n) * n, 0.0);
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c <= r; ++c) flat[r * n + c] = linv(r, c);
+    w.starts.push_back(static_cast<int>(i));
+    w.linv.push_back(std::move(flat));
+    i = j;
+  }
+  w.starts.push_back(static_cast<int>(w.obs.size()));
+  return w;
 }
 
 int GapModel::NumGroups(const Term& t) const {
@@ -262,12 +312,23 @@ std::vector<double> GapModel::Predict(const ModelFit& fit) const {
 
 double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells) const {
   const int k_count = num_metrics();
+  std::vector<size_t> obs;
+  for (size_t o = 0; o < mu.size(); ++o)
+    if (valid(o) && cells[o / k_count] && std::isfinite(mu[o])) obs.push_back(o);
+  const Whitening w = Whiten(obs);
   double sum = 0;
-  for (size_t o = 0; o < mu.size(); ++o) {
-    if (!valid(o) || !cells[o / k_count] || !std::isfinite(mu[o])) continue;
-    double d;
-    const double r = Robust((y_[o] - mu[o]) * weight(o), settings_.huber_k, &d);
-    sum += r * r;
+  for (size_t b = 0; b + 1 < w.starts.size(); ++b) {
+    const int st = w.starts[b], n = w.starts[b + 1] - st;
+    for (int r = 0; r < n; ++r) {
+      double e = 0;
+      for (int c = 0; c <= r; ++c) {
+        const size_t o = w.obs[st + c];
+        e += w.linv[b][r * n + c] * (y_[o] - mu[o]);
+      }
+      double d;
+      const double rr = Robust(e, settings_.huber_k, &d);
+      sum += rr * rr;
+    }
   }
   return sum;
 }
@@ -357,7 +418,7 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
     blocks.push_back({n[0], n[1]});
   }
 
-  auto* cost = new GapCost(model, terms, layout, obs, coords);
+  auto* cost = new GapCost(model, terms, layout, model.Whiten(obs), coords);
   ceres::Problem::Options po;
   ceres::Problem problem(po);
   std::vector<double*> ptrs;
@@ -506,170 +567,6 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
   }
   fit.success = true;
   return fit;
-}
-
-ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
-                      const std::vector<char>& train, const ModelFit* shared) {
-  const Design& d = model.design();
-  const Surface& surf = model.surface(candidate);
-  const Candidate& cand = surf.candidate;
-  const Simulations& sims = model.sims();
-  const int k_count = model.num_metrics();
-  const int scenarios = d.num_scenarios();
-  const FitSettings& fs = model.settings();
-  const int frozen = model.Absorbs(candidate);
-
-  // Profiled value of every node, per scenario (plain squares, calibration in closed form).
-  std::vector<std::vector<double>> value(surf.num_nodes, std::vector<double>(scenarios, 0.0));
-  for (int node = 0; node < surf.num_nodes; ++node) {
-    ScenarioProfile p;
-    p.normal.assign(scenarios, {0, 0, 0, 0, 0});
-    p.rr.assign(scenarios, 0.0);
-    for (int c = 0; c < d.num_cells(); ++c) {
-      if (!train[c]) continue;
-      const int s = d.scenario[c];
-      for (int k = 0; k < k_count; ++k) {
-        const size_t o = static_cast<size_t>(c) * k_count + k;
-        if (!model.valid(o)) continue;
-        const double w = model.weight(o);
-        const double r = (model.y(o) - surf.table[o * surf.num_nodes + node]) * w;
-        const double as = sims.jac_log_sigma[o] * w, ap = sims.jac_logit_p[o] * w;
-        auto& n = p.normal[s];
-        n[0] += as * as;
-        n[1] += as * ap;
-        n[2] += ap * ap;
-        n[3] += as * r;
-        n[4] += ap * r;
-        p.rr[s] += r * r;
-      }
-    }
-    for (int s = 0; s < scenarios; ++s) value[node][s] = ProfiledValue(p, s, fs, frozen);
-  }
-
-  // Starting points. Shared: every local minimum of the profile over the grid (neighbours along
-  // the continuous axes; an effect whose spreads are even in its sign has one on either side;
-  // the absent effect once), the three lowest. Per scenario: each group's best node (discrete
-  // axes included), and the shared fit's values.
-  std::vector<int> discrete_axes;
-  for (size_t a = 0; a < cand.axes.size(); ++a)
-    if (cand.axes[a].discrete) discrete_axes.push_back(static_cast<int>(a));
-  const int groups = per_scenario ? scenarios : 1;
-  struct Option {
-    std::vector<std::vector<int>> discrete_node;  // [group][axis]
-    double value = 0;
-    std::vector<std::vector<double>> values;  // [group][axis]
-  };
-  auto node_values = [&](int node) {
-    const std::vector<int> ax = NodeAxes(surf, node);
-    std::vector<double> v;
-    for (size_t a = 0; a < cand.axes.size(); ++a) v.push_back(cand.axes[a].nodes[ax[a]]);
-    return v;
-  };
-  auto discrete_of = [&](int node) {
-    std::vector<int> d(cand.axes.size(), -1);
-    const std::vector<int> ax = NodeAxes(surf, node);
-    for (int a : discrete_axes) d[a] = ax[a];
-    return d;
-  };
-  std::vector<Option> options;
-  if (!per_scenario) {
-    std::vector<double> total(surf.num_nodes, 0.0);
-    for (int node = 0; node < surf.num_nodes; ++node)
-      for (int sc = 0; sc < scenarios; ++sc) total[node] += value[node][sc];
-    const int n1 = cand.axes.size() > 1 ? static_cast<int>(cand.axes[1].nodes.size()) : 1;
-    for (int node = 0; node < surf.num_nodes; ++node) {
-      const std::vector<int> ax = NodeAxes(surf, node);
-      bool local = !IsNeutral(cand, node_values(node)) || node == 0 || discrete_axes.empty();
-      for (size_t a = 0; a < cand.axes.size() && local; ++a) {
-        if (cand.axes[a].discrete) continue;
-        const int stride = a == 0 ? n1 : 1;
-        if (ax[a] > 0 && total[node - stride] < total[node]) local = false;
-        if (ax[a] + 1 < static_cast<int>(cand.axes[a].nodes.size()) &&
-            total[node + stride] < total[node])
-          local = false;
-      }
-      if (local) options.push_back({{discrete_of(node)}, total[node], {node_values(node)}});
-    }
-    std::sort(options.begin(), options.end(),
-              [](const Option& a, const Option& b) { return a.value < b.value; });
-    if (options.size() > 3) options.resize(3);
-  } else {
-    Option opt;
-    for (int g = 0; g < groups; ++g) {
-      int best_node = 0;
-      for (int node = 1; node < surf.num_nodes; ++node)
-        if (value[node][g] < value[best_node][g]) best_node = node;
-      opt.value += value[best_node][g];
-      opt.discrete_node.push_back(discrete_of(best_node));
-      opt.values.push_back(node_values(best_node));
-    }
-    options.push_back(opt);
-    if (shared && shared->success && !shared->terms.empty()) {
-      const TermFit& t = shared->terms[0];
-      options.push_back({std::vector<std::vector<int>>(groups, t.term.discrete_node[0]), 0,
-                         std::vector<std::vector<double>>(groups, t.values[0])});
-    }
-  }
-
-  ModelFit best;
-  for (const Option& opt : options) {
-    Term term{candidate, per_scenario, opt.discrete_node};
-    ModelFit start;
-    TermFit tf;
-    tf.term = term;
-    tf.values = opt.values;
-    start.terms.push_back(tf);
-    ModelFit f = FitTerms(model, {term}, train, &start);
-    if (f.success && (!best.success || f.Deviance() < best.Deviance())) best = std::move(f);
-  }
-  if (!best.success && best.message.empty()) best.message = "no fit of " + cand.effect;
-  return best;
-}
-
-HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
-                      const std::vector<int>& fold, int num_folds, const ModelFit& full) {
-  HeldOut out;
-  const Design& d = model.design();
-  const int k_count = model.num_metrics();
-  out.mu.assign(model.num_obs(), NAN);
-  out.cells.assign(d.num_cells(), 0);
-  for (int f = 0; f < num_folds; ++f) {
-    std::vector<char> train(d.num_cells(), 0), held(d.num_cells(), 0);
-    bool any = false;
-    for (int c = 0; c < d.num_cells(); ++c) {
-      train[c] = fold[c] != f;
-      held[c] = fold[c] == f;
-      any = any || held[c];
-    }
-    if (!any) continue;
-    ModelFit fit;
-    if (terms.empty()) {
-      fit = FitTerms(model, {}, train);
-    } else if (terms.size() == 1) {
-      const ModelFit shared = terms[0].per_scenario
-                                  ? FitCandidate(model, terms[0].candidate, false, train)
-                                  : ModelFit();
-      fit = FitCandidate(model, terms[0].candidate, terms[0].per_scenario, train, &shared);
-    } else {
-      fit = FitTerms(model, terms, train, &full);
-    }
-    if (!fit.success) {
-      out.success = false;
-      out.message = "fold " + std::to_string(f + 1) + ": " + fit.message;
-      return out;
-    }
-    const std::vector<double> mu = model.Predict(fit);
-    for (int c = 0; c < d.num_cells(); ++c) {
-      if (!held[c]) continue;
-      out.cells[c] = 1;
-      for (int k = 0; k < k_count; ++k) {
-        const size_t o = static_cast<size_t>(c) * k_count + k;
-        out.mu[o] = mu[o];
-      }
-    }
-  }
-  out.data_deviance = model.DataDeviance(out.mu, out.cells);
-  return out;
 }
 
 }  // namespace depthbias::gap

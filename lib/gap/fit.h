@@ -5,23 +5,28 @@
 //
 // For an observation (cell c, compared metric k) with real value y and base simulation b:
 //   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)                   (1)
-//   r = (y − μ) / (σ · √φ_k)                                                         (2)
+//   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · (diag(σ²) + τ_k(D_t)² · 11ᵀ)                          (2)
 // Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
 // the term's group of the cell (one shared group, or the cell's scenario); n_s the scenario's
 // calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J simulated at the base;
-// σ the noise (noise.h) and φ_k the metric's dispersion (how much wider than the replicates'
-// noise its residuals are, ≥ 1). Effects of several terms add (in the metrics' own scales).
+// σ the replicate noise (noise.h), τ the placement scatter of the test point t the recordings
+// share (placement.h: one random effect per test point and metric, so the recordings of one
+// placement count as one piece of evidence, not four), and φ_k the metric's dispersion (how
+// much wider than that the residuals are, ≥ 1); the residuals are whitened block by block
+// (test point × metric). Effects of several terms add (in the metrics' own scales).
 // Ceres minimizes the deviance
 //   D = Σ 2ρ(r) + Σ_s (n_σ,s/τ_σ)² + (n_p,s/τ_p)²                                     (3)
 // with ρ Huber's loss at k (plain squares for k ≤ 0): the calibration may move, at a cost set by
 // its prior widths τ, but no further than the data ask.
 
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "gap/design.h"
 #include "gap/noise.h"
+#include "gap/placement.h"
 #include "gap/simulations.h"
 
 namespace depthbias::gap {
@@ -77,9 +82,10 @@ struct ModelFit {
 
 class GapModel {
  public:
-  // The design, simulations and noise must outlive the model.
+  // The design, simulations, noise and placement must outlive the model; without a placement
+  // estimate (nullptr or empty) every recording is its own block (τ = 0).
   GapModel(const Design& design, const Simulations& sims, const NoiseEstimate& noise,
-           const FitSettings& settings);
+           const FitSettings& settings, const PlacementEstimate* placement = nullptr);
 
   const Design& design() const { return design_; }
   const Simulations& sims() const { return sims_; }
@@ -88,8 +94,21 @@ class GapModel {
   int num_metrics() const { return design_.num_metrics(); }
   bool valid(size_t obs) const { return valid_[obs] != 0; }
   double y(size_t obs) const { return y_[obs]; }
-  double noise(size_t obs) const { return sigma_[obs]; }
-  double weight(size_t obs) const;  // 1 / (σ·√φ_k)
+  // The unit of z: replicate noise and placement scatter, √(σ² + τ²).
+  double noise(size_t obs) const { return total_[obs]; }
+  double replicate_noise(size_t obs) const { return sigma_[obs]; }
+  double placement(size_t obs) const { return total_[obs] > sigma_[obs] ?
+      std::sqrt(total_[obs] * total_[obs] - sigma_[obs] * sigma_[obs]) : 0.0; }
+  double weight(size_t obs) const;  // 1 / (√(σ² + τ²)·√φ_k)
+
+  // The observations grouped in blocks (test point × metric), each block's whitening L⁻¹ of
+  // (2) row-major; obs sorted block by block, starts[b] the first of block b (and the end).
+  struct Whitening {
+    std::vector<size_t> obs;
+    std::vector<int> starts;
+    std::vector<std::vector<double>> linv;
+  };
+  Whitening Whiten(const std::vector<size_t>& obs) const;
   const std::vector<double>& dispersion() const { return phi_; }
   void SetDispersion(const std::vector<double>& phi) { phi_ = phi; }
   const Surface& surface(int candidate) const { return sims_.surfaces[candidate]; }
@@ -121,7 +140,8 @@ class GapModel {
   const Design& design_;
   const Simulations& sims_;
   FitSettings settings_;
-  std::vector<double> y_, sigma_, phi_;
+  std::vector<double> y_, sigma_, total_, phi_;
+  std::vector<int> block_;  // [obs] its test point (−1: a block of its own)
   std::vector<char> valid_;
   std::vector<std::vector<std::vector<double>>> coords_;  // [candidate][axis][node]
   std::vector<int> absorbs_;                               // [candidate]
@@ -148,7 +168,9 @@ struct HeldOut {
   bool success = true;
   std::string message;
 };
+// Only cells marked in `use` (all when empty) are fitted or held out.
 HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
-                      const std::vector<int>& fold, int num_folds, const ModelFit& full);
+                      const std::vector<int>& fold, int num_folds, const ModelFit& full,
+                      const std::vector<char>& use = {});
 
 }  // namespace depthbias::gap

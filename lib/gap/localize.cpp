@@ -19,7 +19,8 @@ std::vector<int> Levels(const Design& d, int factor) {
       case 0: key[c] = std::to_string(cell.distance_m); break;
       case 1: key[c] = std::to_string(cell.angle_deg); break;
       case 2: key[c] = cell.preset; break;
-      default: key[c] = cell.light; break;
+      case 3: key[c] = cell.light; break;
+      default: key[c] = cell.emitter_on ? "on" : "off"; break;
     }
     ids.emplace(key[c], 0);
   }
@@ -107,14 +108,15 @@ std::vector<CellGap> SignificantCells(const Design& d, const std::vector<double>
 
 Localization Localize(const Design& d, const std::vector<double>& z, double alpha) {
   Localization loc;
-  const char* names[4] = {"distance", "angle", "preset", "light"};
+  constexpr int kFactors = 5;
+  const char* names[kFactors] = {"distance", "angle", "preset", "light", "emitter"};
   std::vector<std::vector<int>> level;
-  for (int f = 0; f < 4; ++f) level.push_back(Levels(d, f));
+  for (int f = 0; f < kFactors; ++f) level.push_back(Levels(d, f));
   loc.terms.push_back("offset");
-  for (int f = 0; f < 4; ++f) loc.terms.push_back(names[f]);
+  for (int f = 0; f < kFactors; ++f) loc.terms.push_back(names[f]);
   std::vector<std::pair<int, int>> pairs;
-  for (int a = 0; a < 4; ++a)
-    for (int b = a + 1; b < 4; ++b) {
+  for (int a = 0; a < kFactors; ++a)
+    for (int b = a + 1; b < kFactors; ++b) {
       pairs.emplace_back(a, b);
       loc.terms.push_back(std::string(names[a]) + "×" + names[b]);
     }
@@ -133,7 +135,7 @@ Localization Localize(const Design& d, const std::vector<double>& z, double alph
     std::vector<Eigen::MatrixXd> blocks;
     blocks.push_back(Eigen::MatrixXd::Ones(static_cast<int>(cells.size()), 1));
     std::vector<Eigen::MatrixXd> main;
-    for (int f = 0; f < 4; ++f) {
+    for (int f = 0; f < kFactors; ++f) {
       main.push_back(Indicators(level[f], cells));
       blocks.push_back(main.back());
     }

@@ -1,6 +1,6 @@
 #pragma once
 // Where a gap lies: the share of the squared scaled gap Σz² carried by a common offset, by each
-// factor of the design (distance, angle, preset, light) and by each pair of them, from
+// factor of the design (distance, angle, preset, light, emitter) and by each pair of them, from
 // sequential least squares on indicator columns (the classical analysis of variance: exact
 // shares for a balanced design such as the article's; for an unbalanced one, in the order
 // listed), what is left being higher-order interactions and replicate noise; which metric

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 namespace depthbias::gap {
@@ -27,8 +28,10 @@ double NoiseEstimate::Of(const Design& d, const Simulations& s, int cell, int k)
   return std::sqrt(a * a + q * q);
 }
 
-NoiseEstimate EstimateNoise(const Design& d, const Simulations& s) {
+NoiseEstimate EstimateNoise(const Design& d, const Simulations& s,
+                            const std::vector<char>& train) {
   const int kk = d.num_metrics();
+  auto used = [&](int c) { return train.empty() || train[c]; };
   NoiseEstimate n;
   n.scale.assign(kk, NAN);
   n.pairs.assign(kk, 0);
@@ -36,29 +39,65 @@ NoiseEstimate EstimateNoise(const Design& d, const Simulations& s) {
   for (int k = 0; k < kk; ++k) {
     const int m = d.metrics[k];
     auto obs = [&](int c) { return static_cast<size_t>(c) * kk + k; };
-    std::vector<double> diffs;
+    // The twins' differences, grouped by scenario and distance.
+    std::map<std::pair<int, double>, std::vector<double>> groups;
+    int count = 0;
     for (const auto& p : d.pairs) {
+      if (!used(p[0]) || !used(p[1])) continue;
       const double e_on = d.real[obs(p[0])] - s.base[obs(p[0])];
       const double e_off = d.real[obs(p[1])] - s.base[obs(p[1])];
       if (!std::isfinite(e_on) || !std::isfinite(e_off)) continue;
-      diffs.push_back((e_on - e_off) / NoiseShape(m, s.depth_m[p[0]]));
+      groups[{d.scenario[p[0]], d.cells[p[0]].distance_m}].push_back(
+          (e_on - e_off) / NoiseShape(m, s.depth_m[p[0]]));
+      ++count;
+    }
+    std::vector<double> devs;
+    for (const auto& [key, g] : groups) {
+      if (g.size() < 2) continue;
+      double mean = 0;
+      for (double v : g) mean += v;
+      mean /= static_cast<double>(g.size());
+      const double inflate = std::sqrt(g.size() / (g.size() - 1.0));
+      for (double v : g) devs.push_back((v - mean) * inflate);
     }
     double scale = 0;
-    if (static_cast<int>(diffs.size()) >= kMinReplicatePairs) {
-      scale = 1.4826 * MedianAbs(diffs) / std::sqrt(2.0);
+    if (static_cast<int>(devs.size()) >= kMinReplicatePairs) {
+      scale = 1.4826 * MedianAbs(devs) / std::sqrt(2.0);
       n.method[k] = "replicates";
+      n.pairs[k] = count;
+      const double shape_scale = std::max(scale, InfoOf(m).noise_floor);
+      for (const auto& [key, g] : groups) {
+        EmitterGap e;
+        e.k = k;
+        e.scenario = key.first;
+        e.distance_m = key.second;
+        e.pairs = static_cast<int>(g.size());
+        double mean = 0;
+        for (double v : g) mean += v;
+        mean /= static_cast<double>(g.size());
+        // Back to the metric's unit at this distance (the shape of its first twin's depth).
+        double shape = 1;
+        for (const auto& p : d.pairs)
+          if (d.scenario[p[0]] == key.first && d.cells[p[0]].distance_m == key.second)
+            shape = NoiseShape(m, s.depth_m[p[0]]);
+        e.mean = mean * shape;
+        e.se = std::sqrt(2.0) * shape_scale * shape / std::sqrt(static_cast<double>(g.size()));
+        e.z = e.se > 0 ? e.mean / e.se : 0;
+        n.emitter.push_back(e);
+      }
     } else {
       if (s.replica.empty())
         throw std::invalid_argument("noise: too few emitter on/off pairs and no simulated replica");
-      diffs.clear();
+      std::vector<double> diffs;
       for (int c = 0; c < d.num_cells(); ++c) {
+        if (!used(c)) continue;
         const double e = s.replica[obs(c)] - s.base[obs(c)];
         if (std::isfinite(e)) diffs.push_back(e / NoiseShape(m, s.depth_m[c]));
       }
       scale = diffs.empty() ? 0.0 : 1.4826 * MedianAbs(diffs);
       n.method[k] = "simulated replicates";
+      n.pairs[k] = static_cast<int>(diffs.size());
     }
-    n.pairs[k] = static_cast<int>(diffs.size());
     if (!(scale >= InfoOf(m).noise_floor)) {
       scale = InfoOf(m).noise_floor;
       n.method[k] += " + floor";

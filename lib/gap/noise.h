@@ -1,11 +1,17 @@
 #pragma once
-// The noise of each compared metric, the unit the gap is measured in. From replicates: the
-// emitter on and off rows of one test point are the same panel placement recorded twice, so the
-// difference of their residuals (real − sim) is noise alone, whatever the gap itself is. Its
-// robust scale (1.4826 · median |Δ| / √2) gives the noise of one residual, after dividing each
+// The replicate noise of each compared metric. From replicates: the emitter on and off rows of
+// one test point are the same panel placement recorded twice, so the difference of their
+// residuals (real − sim) is noise, up to the emitter's own effect. That effect is not noise: the
+// simulator's emitter may change a metric the camera's does not (at 4 m the simulated emitter
+// adds several valid points, the camera's about none). So the twins' differences Δ are grouped
+// by scenario and distance, each group's mean (the emitter mismatch, a gap of its own, reported
+// in `emitter`) removed, and the robust scale of what is left (1.4826 · median |Δ − mean|, times
+// √(n/(n − 1)) for the mean removed, over √2) is the noise of one residual, after dividing each
 // difference by the metric's noise shape (Z / 10 m)^e (design.h). With fewer than
 // kMinReplicatePairs pairs, simulated replicates stand in: the base simulated at two seeds,
 // whose difference has the variance of a residual whose real side is as noisy as the model.
+// Placement and session error, which the twins share, is a variance component of its own
+// (placement.h).
 
 #include <string>
 #include <vector>
@@ -17,17 +23,32 @@ namespace depthbias::gap {
 
 constexpr int kMinReplicatePairs = 6;
 
+// The emitter mismatch of one group of twins (a scenario at one distance): the mean over its
+// test points of (real on − real off) − (sim on − sim off), in the metric's unit.
+struct EmitterGap {
+  int k = 0;                // compared metric
+  int scenario = 0;
+  double distance_m = 0;
+  int pairs = 0;
+  double mean = 0;          // the camera's emitter change minus the simulator's
+  double se = 0;            // its standard error (the replicate noise, √2·σ/√n)
+  double z = 0;             // mean / se
+};
+
 struct NoiseEstimate {
   std::vector<double> scale;        // per compared metric: noise at Z = 10 m, in its unit
   std::vector<int> pairs;           // differences it was estimated from
   std::vector<std::string> method;  // "replicates", "simulated replicates"; "+ floor" if raised
+  std::vector<EmitterGap> emitter;  // every group of twins and metric (replicates only)
 
   // Noise of one observation (cell, compared metric k): the scale times the shape, and the
   // metric's quantization in quadrature (design.h).
   double Of(const Design& design, const Simulations& sims, int cell, int k) const;
 };
 
-// Throws std::invalid_argument if simulated replicates are needed and sims has none.
-NoiseEstimate EstimateNoise(const Design& design, const Simulations& sims);
+// Throws std::invalid_argument if simulated replicates are needed and sims has none. Only the
+// cells marked in `train` are used (all when empty).
+NoiseEstimate EstimateNoise(const Design& design, const Simulations& sims,
+                            const std::vector<char>& train = {});
 
 }  // namespace depthbias::gap

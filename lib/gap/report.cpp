@@ -6,23 +6,14 @@
 #include <sstream>
 
 #include "gap/json.h"
+#include "gap/report_util.h"
 
 namespace depthbias::gap {
 namespace {
 
-std::string Num(double v, int digits = 3) {
-  if (!std::isfinite(v)) return "–";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string Pct(double v) {
-  if (!std::isfinite(v)) return "–";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f %%", v);
-  return buf;
-}
+using text::Num;
+using text::Pct;
+using text::ParamsText;
 
 const Candidate& CandidateOf(const DiagnoseResult& r, const TermFit& t) {
   return r.candidates[t.term.candidate];
@@ -66,25 +57,6 @@ void ParamsJson(JsonWriter& w, const std::string& key, const DiagnoseResult& r, 
   w.EndObject();
 }
 
-std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci) {
-  const Candidate& c = CandidateOf(r, t);
-  auto one = [&](int g) {
-    std::string s;
-    for (size_t a = 0; a < c.axes.size(); ++a) {
-      s += (s.empty() ? "" : ", ") + c.axes[a].param + " " + Num(t.values[g][a]);
-      if (with_ci && !c.axes[a].discrete && std::isfinite(t.ci_lo[g][a]))
-        s += " [" + Num(t.ci_lo[g][a]) + ", " + Num(t.ci_hi[g][a]) + "]";
-      if (t.at_bound[g][a]) s += " (grid edge)";
-    }
-    return s;
-  };
-  if (!t.term.per_scenario) return one(0);
-  std::string s;
-  for (size_t g = 0; g < t.values.size(); ++g)
-    s += (s.empty() ? "" : "; ") + r.design.scenario_names[g] + ": " + one(static_cast<int>(g));
-  return s;
-}
-
 void CellGapJson(JsonWriter& w, const DiagnoseResult& r, const CellGap& c) {
   w.BeginObject();
   w.String("bag", r.design.bag[c.cell]).Number("chi2", c.chi2).Integer("df", c.df);
@@ -103,19 +75,132 @@ double Shrink(const GapStat& before, const GapStat& after) {
   return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : NAN;
 }
 
-// Shares of one localization row, largest first, as "distance 18 %, angle×light 21 %, ...".
-std::string TopShares(const std::vector<std::string>& terms, const std::vector<double>& pct,
-                      int count) {
-  std::vector<int> idx(terms.size());
-  for (size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
-  std::sort(idx.begin(), idx.end(), [&](int a, int b) { return pct[a] > pct[b]; });
-  std::string s;
-  for (int i = 0; i < count && i < static_cast<int>(idx.size()); ++i)
-    s += (s.empty() ? "" : ", ") + terms[idx[i]] + " " + Pct(pct[idx[i]]);
-  return s;
+void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
+  const PlacementEstimate& pe = r.placement;
+  w.BeginObject("noise");
+  w.BeginObject("replicate");
+  for (size_t k = 0; k < r.metric_names.size(); ++k) {
+    w.BeginObject(r.metric_names[k]).Number("at_10m", r.noise.scale[k]);
+    w.String("method", r.noise.method[k]).Integer("pairs", r.noise.pairs[k]).EndObject();
+  }
+  w.EndObject();
+  w.BeginObject("placement");
+  if (!pe.empty()) {
+    w.String("unit", "test point (light, distance, angle)").Integer("test_points", pe.num_points);
+    for (size_t k = 0; k < r.metric_names.size(); ++k) {
+      const int m = r.design.metrics[k];
+      w.BeginObject(r.metric_names[k]);
+      w.String("law", m == kMedianBias ? "a + b·D [m]" : "a · (D / 10 m)^e");
+      w.Number("a", pe.a[k]).Number("b", pe.b[k]).Integer("test_points_used", pe.points_used[k]);
+      w.BeginArray("at");
+      for (double d : {4.0, 8.0, 12.0, 16.0}) {
+        w.BeginObject().Number("distance_m", d).Number("scatter", pe.Law(static_cast<int>(k), m, d));
+        if (m == kMedianBias)
+          w.Number("pct_of_distance", 100 * pe.Law(static_cast<int>(k), m, d) / d);
+        w.EndObject();
+      }
+      w.EndArray();
+      w.BeginArray("test_points");
+      for (int t = 0; t < pe.num_points; ++t) {
+        w.BeginObject().String("light", pe.point_light[t]).Bool("flagged", pe.flagged[k][t]);
+        w.Number("distance_m", pe.point_distance_m[t]).Number("angle_deg", pe.point_angle_deg[t]);
+        w.Number("departure", pe.departure[k][t]).Number("z", pe.departure_z[k][t]);
+        if (m == kMedianBias)
+          w.String("direction", pe.departure[k][t] > 0 ? "over-reads" : "under-reads");
+        w.EndObject();
+      }
+      w.EndArray().EndObject();
+    }
+  }
+  w.EndObject();
+  w.BeginArray("emitter");
+  for (const EmitterGap& e : r.noise.emitter) {
+    w.BeginObject().String("scenario", r.design.scenario_names[e.scenario]);
+    w.Number("distance_m", e.distance_m).String("metric", r.metric_names[e.k]);
+    w.Integer("pairs", e.pairs).Number("mismatch", e.mean).Number("se", e.se).Number("z", e.z);
+    w.EndObject();
+  }
+  w.EndArray().EndObject();
+}
+
+void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
+  const Nested& n = r.nested;
+  if (!n.run) {
+    w.Null("nested");
+    return;
+  }
+  w.BeginObject("nested");
+  w.BeginArray("folds");
+  for (const NestedFold& f : n.folds) {
+    w.BeginObject().String("held", f.held).Integer("cells", f.cells);
+    w.BeginArray("selected");
+    for (const auto& s : f.selected) w.String(s);
+    w.EndArray();
+    w.Number("deviance_calibrated", f.deviance_calibrated);
+    w.Number("deviance_selected", f.deviance_selected).Bool("simulated", f.simulated);
+    w.EndObject();
+  }
+  w.EndArray();
+  GapJsonStat(w, "baseline", r, n.baseline);
+  GapJsonStat(w, "calibrated", r, n.calibrated);
+  GapJsonStat(w, "selected", r, n.selected);
+  if (std::isfinite(n.shrink_simulated_pct)) GapJsonStat(w, "simulated", r, n.simulated);
+  else w.Null("simulated");
+  w.Number("gain", n.gain).EndObject();
+}
+
+void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
+  w.BeginArray("ambiguous");
+  for (const Ambiguity& a : r.ambiguous) {
+    w.BeginObject().BeginArray("one_of");
+    for (const auto& e : a.effects) w.String(e);
+    w.EndArray().BeginArray("sizes");
+    for (const auto& s : a.sizes) w.String(s);
+    w.EndArray().Number("correlation", a.correlation).EndObject();
+  }
+  w.EndArray();
+  w.BeginArray("not_kept");
+  for (const auto& d : r.dropped) w.String(d);
+  w.EndArray();
+  w.BeginArray("unexplained");
+  for (const Unexplained& u : r.unexplained) {
+    w.BeginObject().String("metric", u.metric).String("where", u.where);
+    w.Number("size", u.size).Number("size_se", u.size_se).String("unit", u.unit);
+    w.String("form", u.form).Number("size_at_far_end", u.size_at_max);
+    w.Number("share_pct", u.share_pct).Number("chi2", u.chi2).Integer("cells", u.df);
+    w.Number("p_value", u.p_value);
+    w.BeginArray("bags");
+    for (int c : u.cells) w.String(r.design.bag[c]);
+    w.EndArray().EndObject();
+  }
+  w.EndArray();
 }
 
 }  // namespace
+
+std::string text::ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
+                             bool hide_edges) {
+  const Candidate& c = r.candidates[t.term.candidate];
+  auto one = [&](int g) {
+    std::string s;
+    for (size_t a = 0; a < c.axes.size(); ++a) {
+      if (hide_edges && t.at_bound[g][a]) {
+        s += (s.empty() ? "" : ", ") + c.axes[a].param + " at the grid's edge (not determined)";
+        continue;
+      }
+      s += (s.empty() ? "" : ", ") + c.axes[a].param + " " + Num(t.values[g][a]);
+      if (with_ci && !c.axes[a].discrete && std::isfinite(t.ci_lo[g][a]))
+        s += " [" + Num(t.ci_lo[g][a]) + ", " + Num(t.ci_hi[g][a]) + "]";
+      if (t.at_bound[g][a]) s += " (grid edge)";
+    }
+    return s;
+  };
+  if (!t.term.per_scenario) return one(0);
+  std::string s;
+  for (size_t g = 0; g < t.values.size(); ++g)
+    s += (s.empty() ? "" : "; ") + r.design.scenario_names[g] + ": " + one(static_cast<int>(g));
+  return s;
+}
 
 std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const ReportContext& ctx) {
   JsonWriter w;
@@ -150,6 +235,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   }
   w.EndArray();
 
+  NoiseJson(w, r);
   w.BeginObject("baseline_gap");
   GapJsonStat(w, "in_sample", r, r.baseline);
   GapJsonStat(w, "heldout_cells", r, r.baseline_heldout);
@@ -244,7 +330,11 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   else w.Null("selected_simulated");
   w.Number("shrink_in_sample_pct", Shrink(r.baseline, r.selected_in));
   w.Number("shrink_heldout_pct", Shrink(r.baseline_heldout, r.selected_heldout));
+  w.Number("shrink_heldout_nested_pct", r.nested.shrink_heldout_nested_pct);
+  w.Number("shrink_simulated_pct", r.nested.shrink_simulated_pct);
+  NestedJson(w, r);
   w.EndObject();
+  OpenWorldJson(w, r);
 
   w.BeginObject("remaining_gap");
   GapJsonStat(w, "in_sample", r, r.selected_in);
@@ -282,42 +372,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   return w.Text();
 }
 
-std::string GapSummary(const DiagnoseResult& r) {
-  std::ostringstream o;
-  const Localization& loc = r.localization;
-  int worst = 0;
-  for (size_t k = 1; k < loc.metric_share_pct.size(); ++k)
-    if (loc.metric_share_pct[k] > loc.metric_share_pct[worst]) worst = static_cast<int>(k);
-  o << "where: baseline gap " << Num(r.baseline.overall) << " (mean squared gap in noise units; 1 "
-    << "= repeatability), " << loc.significant.size() << " of " << r.design.num_cells()
-    << " cells significant; carried by " << r.metric_names[worst] << " ("
-    << Pct(loc.metric_share_pct[worst])
-    << "); by factor: " << TopShares(loc.terms, loc.overall_pct, 3)
-    << "\n";
-  if (!r.effects.empty())
-    o << "which: best alone " << r.effects[0].name << " (" << ParamsText(r, r.effects[0].fit, false)
-      << "; ΔBIC " << Num(r.effects[0].delta_bic) << ", held-out gain "
-      << Num(r.effects[0].heldout_gain) << ")\n";
-  if (r.steps.empty()) {
-    o << "selected: none (no effect earns both its BIC and a held-out gain)\n";
-  } else {
-    o << "selected:";
-    for (size_t i = 0; i < r.selected.terms.size(); ++i)
-      o << (i ? ";" : "") << " " << CandidateOf(r, r.selected.terms[i]).effect << " ("
-        << ParamsText(r, r.selected.terms[i], false) << ")";
-    o << "\n";
-  }
-  o << "how far: gap " << Num(r.baseline.overall) << " -> " << Num(r.selected_in.overall)
-    << " in sample (" << Pct(Shrink(r.baseline, r.selected_in)) << " shrink), "
-    << Num(r.baseline_heldout.overall) << " -> " << Num(r.selected_heldout.overall)
-    << " held out (" << Pct(Shrink(r.baseline_heldout, r.selected_heldout)) << ")";
-  if (r.verified) o << ", simulated " << Num(r.verified_in.overall);
-  o << "\nleft: " << r.remaining.size() << " of " << r.design.num_cells()
-    << " cells still significant\n";
-  for (const auto& c : r.confounded)
-    o << "confounded: " << c.a << " ~ " << c.b << " (r = " << Num(c.correlation) << ")\n";
-  return o.str();
-}
+std::string GapSummary(const DiagnoseResult& r) { return text::Headline(r); }
 
 std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
                         const ReportContext& ctx) {
@@ -334,7 +389,7 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
     o << "Rows left out: " << r.design.skipped.size() << " (" << r.design.skipped.front()
       << (r.design.skipped.size() > 1 ? ", …" : "") << ").\n\n";
 
-  o << "## In short\n\n```\n" << GapSummary(r) << "```\n\n";
+  o << "## In short\n\n```\n" << GapSummary(r) << "```\n\n" << text::EvidenceMarkdown(r, p);
 
   o << "## 1. The gap\n\n"
     << "Per recording and metric, z = (real − simulated) / noise. The noise of each metric is "

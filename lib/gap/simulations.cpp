@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <stdexcept>
 
 namespace depthbias::gap {
@@ -91,17 +92,22 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
   if (params.empty() || (params.size() != 1 && static_cast<int>(params.size()) != groups))
     throw std::invalid_argument("SimulateValues: one parameter set, or one per scenario");
   for (int g = 0; g < groups; ++g) {
+    // Identical cells (one name: one seed, one result) are simulated once.
     std::vector<sim::Cell> cells;
-    std::vector<int> index;
+    std::vector<int> index;  // [cell of the design] → its simulated cell, −1 if not in g
+    std::map<std::string, int> seen;
+    index.assign(d.num_cells(), -1);
     for (int c = 0; c < d.num_cells(); ++c) {
       if (groups > 1 && d.scenario[c] != g) continue;
-      cells.push_back(d.cells[c]);
-      index.push_back(c);
+      const auto it = seen.emplace(d.cells[c].name, static_cast<int>(cells.size())).first;
+      if (it->second == static_cast<int>(cells.size())) cells.push_back(d.cells[c]);
+      index[c] = it->second;
     }
     if (cells.empty()) continue;
     const std::vector<sim::CellMetricsResult> r = sim::SimulateCellsMetrics(params[g], cells, mp);
-    for (size_t i = 0; i < cells.size(); ++i) {
-      const int c = index[i];
+    for (int c = 0; c < d.num_cells(); ++c) {
+      const int i = index[c];
+      if (i < 0) continue;
       if (depth_m) (*depth_m)[c] = r[i].truth.panel_depth_m;
       if (!r[i].metrics.ok()) continue;
       for (int k = 0; k < k_count; ++k)

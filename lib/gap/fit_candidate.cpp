@@ -1,0 +1,206 @@
+// The fits of single candidates (from their grid profile) and cross-validation (fit.h).
+#include "gap/fit.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+namespace depthbias::gap {
+namespace {
+
+// The node of a (possibly 2-D) grid as axis indices.
+std::vector<int> NodeAxes(const Surface& s, int node) {
+  if (s.candidate.axes.size() == 1) return {node};
+  const int n1 = static_cast<int>(s.candidate.axes[1].nodes.size());
+  return {node / n1, node % n1};
+}
+
+// Per scenario, the calibration moves that minimize Σ (r − a·n)² + Σ (n/τ)² given residuals r
+// and the Jacobian columns a (plain squares), and the value reached.
+struct ScenarioProfile {
+  std::vector<std::array<double, 5>> normal;  // per scenario: Σa_σ², Σa_σa_p, Σa_p², Σa_σ r, Σa_p r
+  std::vector<double> rr;                     // per scenario: Σ r²
+};
+
+double ProfiledValue(const ScenarioProfile& p, int s, const FitSettings& fs, int frozen) {
+  const auto& n = p.normal[s];
+  Eigen::Matrix2d a;
+  const double held = 1e12;  // a frozen component: its move costs everything
+  a << n[0] + (frozen & 1 ? held : 1 / (fs.tau_log_sigma * fs.tau_log_sigma)), n[1], n[1],
+      n[2] + (frozen & 2 ? held : 1 / (fs.tau_logit_p * fs.tau_logit_p));
+  const Eigen::Vector2d b(n[3], n[4]);
+  const Eigen::Vector2d x = a.ldlt().solve(b);
+  return p.rr[s] - b.dot(x);  // min of rᵀr − 2bᵀx + xᵀAx
+}
+
+}  // namespace
+
+ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
+                      const std::vector<char>& train, const ModelFit* shared) {
+  const Design& d = model.design();
+  const Surface& surf = model.surface(candidate);
+  const Candidate& cand = surf.candidate;
+  const Simulations& sims = model.sims();
+  const int k_count = model.num_metrics();
+  const int scenarios = d.num_scenarios();
+  const FitSettings& fs = model.settings();
+  const int frozen = model.Absorbs(candidate);
+
+  // Profiled value of every node, per scenario (plain squares, calibration in closed form).
+  std::vector<std::vector<double>> value(surf.num_nodes, std::vector<double>(scenarios, 0.0));
+  for (int node = 0; node < surf.num_nodes; ++node) {
+    ScenarioProfile p;
+    p.normal.assign(scenarios, {0, 0, 0, 0, 0});
+    p.rr.assign(scenarios, 0.0);
+    for (int c = 0; c < d.num_cells(); ++c) {
+      if (!train[c]) continue;
+      const int s = d.scenario[c];
+      for (int k = 0; k < k_count; ++k) {
+        const size_t o = static_cast<size_t>(c) * k_count + k;
+        if (!model.valid(o)) continue;
+        const double w = model.weight(o);
+        const double r = (model.y(o) - surf.table[o * surf.num_nodes + node]) * w;
+        const double as = sims.jac_log_sigma[o] * w, ap = sims.jac_logit_p[o] * w;
+        auto& n = p.normal[s];
+        n[0] += as * as;
+        n[1] += as * ap;
+        n[2] += ap * ap;
+        n[3] += as * r;
+        n[4] += ap * r;
+        p.rr[s] += r * r;
+      }
+    }
+    for (int s = 0; s < scenarios; ++s) value[node][s] = ProfiledValue(p, s, fs, frozen);
+  }
+
+  // Starting points. Shared: every local minimum of the profile over the grid (neighbours along
+  // the continuous axes; an effect whose spreads are even in its sign has one on either side;
+  // the absent effect once), the three lowest. Per scenario: each group's best node (discrete
+  // axes included), and the shared fit's values.
+  std::vector<int> discrete_axes;
+  for (size_t a = 0; a < cand.axes.size(); ++a)
+    if (cand.axes[a].discrete) discrete_axes.push_back(static_cast<int>(a));
+  const int groups = per_scenario ? scenarios : 1;
+  struct Option {
+    std::vector<std::vector<int>> discrete_node;  // [group][axis]
+    double value = 0;
+    std::vector<std::vector<double>> values;  // [group][axis]
+  };
+  auto node_values = [&](int node) {
+    const std::vector<int> ax = NodeAxes(surf, node);
+    std::vector<double> v;
+    for (size_t a = 0; a < cand.axes.size(); ++a) v.push_back(cand.axes[a].nodes[ax[a]]);
+    return v;
+  };
+  auto discrete_of = [&](int node) {
+    std::vector<int> d(cand.axes.size(), -1);
+    const std::vector<int> ax = NodeAxes(surf, node);
+    for (int a : discrete_axes) d[a] = ax[a];
+    return d;
+  };
+  std::vector<Option> options;
+  if (!per_scenario) {
+    std::vector<double> total(surf.num_nodes, 0.0);
+    for (int node = 0; node < surf.num_nodes; ++node)
+      for (int sc = 0; sc < scenarios; ++sc) total[node] += value[node][sc];
+    const int n1 = cand.axes.size() > 1 ? static_cast<int>(cand.axes[1].nodes.size()) : 1;
+    for (int node = 0; node < surf.num_nodes; ++node) {
+      const std::vector<int> ax = NodeAxes(surf, node);
+      bool local = !IsNeutral(cand, node_values(node)) || node == 0 || discrete_axes.empty();
+      for (size_t a = 0; a < cand.axes.size() && local; ++a) {
+        if (cand.axes[a].discrete) continue;
+        const int stride = a == 0 ? n1 : 1;
+        if (ax[a] > 0 && total[node - stride] < total[node]) local = false;
+        if (ax[a] + 1 < static_cast<int>(cand.axes[a].nodes.size()) &&
+            total[node + stride] < total[node])
+          local = false;
+      }
+      if (local) options.push_back({{discrete_of(node)}, total[node], {node_values(node)}});
+    }
+    std::sort(options.begin(), options.end(),
+              [](const Option& a, const Option& b) { return a.value < b.value; });
+    if (options.size() > 3) options.resize(3);
+  } else {
+    Option opt;
+    for (int g = 0; g < groups; ++g) {
+      int best_node = 0;
+      for (int node = 1; node < surf.num_nodes; ++node)
+        if (value[node][g] < value[best_node][g]) best_node = node;
+      opt.value += value[best_node][g];
+      opt.discrete_node.push_back(discrete_of(best_node));
+      opt.values.push_back(node_values(best_node));
+    }
+    options.push_back(opt);
+    if (shared && shared->success && !shared->terms.empty()) {
+      const TermFit& t = shared->terms[0];
+      options.push_back({std::vector<std::vector<int>>(groups, t.term.discrete_node[0]), 0,
+                         std::vector<std::vector<double>>(groups, t.values[0])});
+    }
+  }
+
+  ModelFit best;
+  for (const Option& opt : options) {
+    Term term{candidate, per_scenario, opt.discrete_node};
+    ModelFit start;
+    TermFit tf;
+    tf.term = term;
+    tf.values = opt.values;
+    start.terms.push_back(tf);
+    ModelFit f = FitTerms(model, {term}, train, &start);
+    if (f.success && (!best.success || f.Deviance() < best.Deviance())) best = std::move(f);
+  }
+  if (!best.success && best.message.empty()) best.message = "no fit of " + cand.effect;
+  return best;
+}
+
+HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
+                      const std::vector<int>& fold, int num_folds, const ModelFit& full,
+                      const std::vector<char>& use) {
+  HeldOut out;
+  const Design& d = model.design();
+  const int k_count = model.num_metrics();
+  out.mu.assign(model.num_obs(), NAN);
+  out.cells.assign(d.num_cells(), 0);
+  for (int f = 0; f < num_folds; ++f) {
+    std::vector<char> train(d.num_cells(), 0), held(d.num_cells(), 0);
+    bool any = false;
+    for (int c = 0; c < d.num_cells(); ++c) {
+      const bool in = use.empty() || use[c];
+      train[c] = in && fold[c] != f;
+      held[c] = in && fold[c] == f;
+      any = any || held[c];
+    }
+    if (!any) continue;
+    ModelFit fit;
+    if (terms.empty()) {
+      fit = FitTerms(model, {}, train);
+    } else if (terms.size() == 1) {
+      const ModelFit shared = terms[0].per_scenario
+                                  ? FitCandidate(model, terms[0].candidate, false, train)
+                                  : ModelFit();
+      fit = FitCandidate(model, terms[0].candidate, terms[0].per_scenario, train, &shared);
+    } else {
+      fit = FitTerms(model, terms, train, &full);
+    }
+    if (!fit.success) {
+      out.success = false;
+      out.message = "fold " + std::to_string(f + 1) + ": " + fit.message;
+      return out;
+    }
+    const std::vector<double> mu = model.Predict(fit);
+    for (int c = 0; c < d.num_cells(); ++c) {
+      if (!held[c]) continue;
+      out.cells[c] = 1;
+      for (int k = 0; k < k_count; ++k) {
+        const size_t o = static_cast<size_t>(c) * k_count + k;
+        out.mu[o] = mu[o];
+      }
+    }
+  }
+  out.data_deviance = model.DataDeviance(out.mu, out.cells);
+  return out;
+}
+
+}  // namespace depthbias::gap

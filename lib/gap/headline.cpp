@@ -1,0 +1,238 @@
+// The report's headline for a safety engineer and the evidence behind it: range error in metres
+// and its direction first, then placement, emitter, selection, the open world and the nested
+// hold-out (report_util.h).
+#include <algorithm>
+#include <sstream>
+
+#include "gap/report_util.h"
+
+namespace depthbias::gap::text {
+namespace {
+
+std::string PointName(const PlacementEstimate& pe, int t) {
+  return pe.point_light[t] + " " + Num(pe.point_distance_m[t]) + " m " +
+         Num(pe.point_angle_deg[t]) + "°";
+}
+
+// Index of the median bias among the compared metrics (−1: none).
+int MedianIndex(const DiagnoseResult& r) {
+  for (size_t k = 0; k < r.design.metrics.size(); ++k)
+    if (r.design.metrics[k] == kMedianBias) return static_cast<int>(k);
+  return -1;
+}
+
+std::string Direction(double metres) {
+  return metres > 0 ? "reads farther than the simulator: over-reads (the dangerous direction)"
+                    : "reads nearer than the simulator: under-reads";
+}
+
+const double kEmitterZ = 3.5;  // an emitter mismatch worth a headline (|z|, about p < 0.05/64)
+
+}  // namespace
+
+std::string Headline(const DiagnoseResult& r) {
+  std::ostringstream o;
+  const int km = MedianIndex(r);
+  const PlacementEstimate& pe = r.placement;
+  // 1. Range error the simulator does not reproduce.
+  bool range = false;
+  for (const Unexplained& u : r.unexplained) {
+    if (u.metric != "median_bias_m") continue;
+    range = true;
+    o << "range: where " << u.where << ", the camera " << Direction(u.size) << " by "
+      << Num(std::fabs(u.size)) << " m (95 % ± " << Num(1.96 * u.size_se, 2) << " m, "
+      << u.cells.size() << " recordings; form " << u.form;
+    if (u.form == "∝ D" || u.form == "∝ D²") o << ", " << Signed(u.size_at_max) << " m at the far end";
+    o << "); no registered effect explains it\n";
+  }
+  if (!range && km >= 0)
+    o << "range: the simulator" << (r.steps.empty() ? "" : " with the selected effects")
+      << " reproduces the camera's median range within noise and placement scatter\n";
+  // 2. Placement.
+  if (!pe.empty() && km >= 0) {
+    auto law = [&](double d) { return pe.Law(km, kMedianBias, d); };
+    o << "placement scatter of a test point: " << Num(pe.a[km], 2) << " m + "
+      << Num(100 * pe.b[km], 2) << " % of distance (" << Num(law(4), 2) << " m at 4 m, "
+      << Num(law(16), 2) << " m = " << Num(100 * law(16) / 16, 2) << " % at 16 m; REML over "
+      << pe.points_used[km] << " test points)\n";
+    std::vector<int> flagged;
+    for (int t = 0; t < pe.num_points; ++t)
+      if (pe.flagged[km][t]) flagged.push_back(t);
+    std::sort(flagged.begin(), flagged.end(), [&](int a, int b) {
+      return pe.departure[km][a] > pe.departure[km][b];
+    });
+    for (int t : flagged)
+      o << "  beyond it: " << PointName(pe, t) << ": " << Signed(pe.departure[km][t], 2)
+        << " m (z " << Num(pe.departure_z[km][t], 2) << "; "
+        << (pe.departure[km][t] > 0 ? "reads far: over-reads" : "reads near: under-reads")
+        << ")\n";
+  }
+  // 3. Emitter.
+  const EmitterGap* worst = nullptr;
+  int significant = 0;
+  for (const EmitterGap& e : r.noise.emitter) {
+    if (std::fabs(e.z) < kEmitterZ) continue;
+    ++significant;
+    if (!worst || std::fabs(e.z) > std::fabs(worst->z)) worst = &e;
+  }
+  if (worst)
+    o << "emitter: the camera's emitter on − off differs from the simulator's in " << significant
+      << " scenario × distance × metric groups; most at " << r.design.scenario_names[worst->scenario]
+      << " " << Num(worst->distance_m) << " m: " << r.metric_names[worst->k] << " "
+      << Signed(worst->mean) << " (z " << Num(worst->z, 2) << ")\n";
+  // 4. Which effect.
+  if (r.steps.empty()) {
+    o << "selected: none (no registered effect earns its place in and out of the outer folds)\n";
+  } else {
+    o << "selected:";
+    for (size_t i = 0; i < r.selected.terms.size(); ++i)
+      o << (i ? ";" : "") << " " << r.candidates[r.selected.terms[i].term.candidate].effect
+        << " (" << ParamsText(r, r.selected.terms[i], false, true) << ")";
+    o << "\n";
+  }
+  for (const auto& d : r.dropped) o << "not kept: " << d << "\n";
+  for (const Ambiguity& a : r.ambiguous) {
+    o << "one of {";
+    for (size_t i = 0; i < a.effects.size(); ++i) o << (i ? ", " : "") << a.effects[i];
+    o << "}: cannot be told apart here (r = " << Num(a.correlation) << "); would need";
+    for (size_t i = 0; i < a.effects.size(); ++i)
+      o << (i ? "; " : " ") << a.effects[i] << " " << a.sizes[i];
+    o << "\n";
+  }
+  for (const Unexplained& u : r.unexplained) {
+    if (u.metric == "median_bias_m") continue;
+    o << "unexplained: " << u.metric << " " << Signed(u.size) << " " << u.unit << " where "
+      << u.where << " (form " << u.form << ", " << Pct(u.share_pct) << " of its remaining gap)\n";
+  }
+  // 5. How far.
+  const Nested& n = r.nested;
+  if (n.run) {
+    o << "how far, held out (outer folds: every fit made without the cells it is judged on): gap "
+      << Num(n.baseline.overall) << " -> " << Num(n.simulated.overall)
+      << " with the selection simulated (" << Pct(n.shrink_simulated_pct) << " shrink), "
+      << Num(n.selected.overall) << " added (" << Pct(n.shrink_heldout_nested_pct) << ")\n";
+  } else {
+    o << "how far: gap " << Num(r.baseline.overall) << " -> " << Num(r.selected_heldout.overall)
+      << " held out (" << Pct(ShrinkPct(r.baseline_heldout, r.selected_heldout))
+      << "); no nested hold-out" << (n.message.empty() ? "" : ": " + n.message) << "\n";
+  }
+  o << "left: " << r.remaining.size() << " of " << r.design.num_cells()
+    << " recordings depart beyond noise and placement scatter\n";
+  return o.str();
+}
+
+std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
+  std::ostringstream o;
+  const PlacementEstimate& pe = r.placement;
+  const int kk = static_cast<int>(r.metric_names.size());
+  o << "## Noise, placement and the emitter\n\n"
+    << "The gap is measured against two variances: the replicate noise σ (emitter on/off twins "
+    << "of one placement, with the emitter mismatch removed per scenario and distance) and the "
+    << "placement scatter τ of a test point (light, distance, angle), which all its recordings "
+    << "share: a random effect, its law in distance estimated by REML about main effects and "
+    << "two-factor interactions of light, distance, angle, preset and emitter. z = "
+    << "(real − sim) / √(σ² + τ²); the fits whiten the recordings of one test point together.\n\n";
+  if (!pe.empty()) {
+    o << "| metric | law | τ at 4 m | τ at 8 m | τ at 12 m | τ at 16 m | test points used | "
+         "beyond the law |\n|---|---|---|---|---|---|---|---|\n";
+    for (int k = 0; k < kk; ++k) {
+      const int m = r.design.metrics[k];
+      int flagged = 0;
+      for (int t = 0; t < pe.num_points; ++t) flagged += pe.flagged[k][t];
+      o << "| " << r.metric_names[k] << " | "
+        << (m == kMedianBias ? Num(pe.a[k], 3) + " m + " + Num(100 * pe.b[k], 3) + " % of D"
+                             : Num(pe.a[k], 3) + " " + InfoOf(m).unit + " × (D/10 m)^" +
+                                   Num(InfoOf(m).noise_exponent))
+        << " |";
+      for (double d : {4.0, 8.0, 12.0, 16.0}) o << " " << Num(pe.Law(k, m, d)) << " |";
+      o << " " << pe.points_used[k] << " | " << flagged << " |\n";
+    }
+    o << "\nTest points beyond the law (p < " << Num(p.placement_alpha) << " / " << pe.num_points
+      << ", left out of its estimate and given their own departure as scatter, so that they "
+      << "are never taken for a camera effect):\n\n| test point | metric | departure | z |\n"
+      << "|---|---|---|---|\n";
+    int rows = 0;
+    for (int k = 0; k < kk; ++k)
+      for (int t = 0; t < pe.num_points; ++t)
+        if (pe.flagged[k][t]) {
+          ++rows;
+          o << "| " << PointName(pe, t) << " | " << r.metric_names[k] << " | "
+            << Signed(pe.departure[k][t]) << " " << InfoOf(r.design.metrics[k]).unit << " | "
+            << Num(pe.departure_z[k][t], 2) << " |\n";
+        }
+    if (!rows) o << "| none | | | |\n";
+  }
+  o << "\nEmitter mismatch (the camera's emitter on − off minus the simulator's, mean over the "
+    << "test points of a scenario and distance; |z| ≥ " << Num(kEmitterZ) << " listed):\n\n"
+    << "| scenario | distance | metric | mismatch | z |\n|---|---|---|---|---|\n";
+  int listed = 0;
+  for (const EmitterGap& e : r.noise.emitter)
+    if (std::fabs(e.z) >= kEmitterZ) {
+      ++listed;
+      o << "| " << r.design.scenario_names[e.scenario] << " | " << Num(e.distance_m) << " m | "
+        << r.metric_names[e.k] << " | " << Signed(e.mean) << " | " << Num(e.z, 2) << " |\n";
+    }
+  if (!listed) o << "| none | | | | |\n";
+
+  const Nested& n = r.nested;
+  o << "\n## Held out, nested\n\n";
+  if (!n.run) {
+    o << "Not run" << (n.message.empty() ? "." : ": " + n.message + ".") << "\n";
+  } else {
+    o << "Each outer fold (" << r.holdout << ") is diagnosed from scratch without its cells "
+      << "(noise, placement, calibration, φ, scope, selection with its own inner hold-out), "
+      << "then its selection predicts the held-out cells, added to the base simulation and "
+      << "simulated together at its fitted values. Gaps are in each fold's own units.\n\n"
+      << "| outer fold | cells | its selection | held-out deviance, calibrated → selected |\n"
+      << "|---|---|---|---|\n";
+    for (const NestedFold& f : n.folds) {
+      std::string sel;
+      for (const auto& s : f.selected) sel += (sel.empty() ? "" : ", ") + s;
+      o << "| " << f.held << " | " << f.cells << " | " << (sel.empty() ? "none" : sel) << " | "
+        << Num(f.deviance_calibrated) << " → " << Num(f.deviance_selected) << " |\n";
+    }
+    o << "\n| held-out gap | all metrics |";
+    for (int k = 0; k < kk; ++k) o << " " << r.metric_names[k] << " |";
+    o << "\n|---|---|";
+    for (int k = 0; k < kk; ++k) o << "---|";
+    o << "\n";
+    auto row = [&](const std::string& name, const GapStat& g) {
+      o << "| " << name << " | " << Num(g.overall) << " |";
+      for (int k = 0; k < kk && k < static_cast<int>(g.mean_sq.size()); ++k)
+        o << " " << Num(g.mean_sq[k]) << " |";
+      o << "\n";
+    };
+    row("baseline", n.baseline);
+    row("calibrated", n.calibrated);
+    row("selection added", n.selected);
+    if (std::isfinite(n.shrink_simulated_pct)) row("selection simulated", n.simulated);
+    o << "\nShrink held out: " << Pct(n.shrink_simulated_pct) << " simulated (the headline), "
+      << Pct(n.shrink_heldout_nested_pct) << " added.\n";
+  }
+  o << "\n## Named, not selected\n\n";
+  if (r.ambiguous.empty() && r.dropped.empty()) o << "- none\n";
+  for (const Ambiguity& a : r.ambiguous) {
+    o << "- one of {";
+    for (size_t i = 0; i < a.effects.size(); ++i) o << (i ? ", " : "") << a.effects[i];
+    o << "} (r = " << Num(a.correlation) << "):";
+    for (size_t i = 0; i < a.effects.size(); ++i)
+      o << (i ? ";" : "") << " " << a.effects[i] << " would need " << a.sizes[i];
+    o << "\n";
+  }
+  for (const auto& d : r.dropped) o << "- not kept: " << d << "\n";
+  o << "\n## Not explained by any registered effect\n\n";
+  if (r.unexplained.empty())
+    o << "No metric's remaining gap is significant (χ², p < " << Num(p.alpha) << " / metrics).\n";
+  else
+    o << "| metric | where | size [95 %] | form | at the far end | share of its rest | χ² / "
+         "cells |\n|---|---|---|---|---|---|---|\n";
+  for (const Unexplained& u : r.unexplained)
+    o << "| " << u.metric << " | " << u.where << " | " << Signed(u.size) << " ± "
+      << Num(1.96 * u.size_se, 2) << " " << u.unit << " | " << u.form << " | "
+      << Signed(u.size_at_max) << " | " << Pct(u.share_pct) << " | " << Num(u.chi2) << " / "
+      << u.df << " |\n";
+  o << "\n";
+  return o.str();
+}
+
+}  // namespace depthbias::gap::text

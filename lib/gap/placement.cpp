@@ -1,0 +1,298 @@
+#include "gap/placement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include <Eigen/Dense>
+
+namespace depthbias::gap {
+namespace {
+
+// Φ⁻¹(1 − p/2) for small p, by bisection on erfc.
+double TwoSidedCritical(double p) {
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Level of every cell for a factor (0: light, 1: distance, 2: angle, 3: preset, 4: emitter).
+std::vector<int> Levels(const Design& d, int factor, int* count) {
+  std::map<std::string, int> ids;
+  std::vector<std::string> key(d.cells.size());
+  for (size_t c = 0; c < d.cells.size(); ++c) {
+    const sim::Cell& cell = d.cells[c];
+    switch (factor) {
+      case 0: key[c] = cell.light; break;
+      case 1: key[c] = std::to_string(cell.distance_m); break;
+      case 2: key[c] = std::to_string(cell.angle_deg); break;
+      case 3: key[c] = cell.preset; break;
+      default: key[c] = cell.emitter_on ? "on" : "off"; break;
+    }
+    ids.emplace(key[c], 0);
+  }
+  int i = 0;
+  for (auto& [k, id] : ids) id = i++;
+  *count = i;
+  std::vector<int> out;
+  for (const auto& k : key) out.push_back(ids.at(k));
+  return out;
+}
+
+// Columns of the fixed effects for the listed cells: a common offset, the main effects and the
+// two-factor interactions of the five factors (indicator coding) but light × angle, reduced to
+// full rank. The registry's laws act through distance and angle jointly (range against depth,
+// a tilt, a radial residual, edge mixing) and per scenario (light × preset) with distance; none
+// makes the light change how the angle acts. A light × angle pattern is a session's placement:
+// the stand of one session set off at one angle.
+Eigen::MatrixXd FixedEffects(const Design& d, const std::vector<int>& cells) {
+  std::vector<std::vector<int>> level(5);
+  std::vector<int> count(5);
+  for (int f = 0; f < 5; ++f) level[f] = Levels(d, f, &count[f]);
+  const int n = static_cast<int>(cells.size());
+  std::vector<Eigen::VectorXd> cols;
+  cols.push_back(Eigen::VectorXd::Ones(n));
+  std::vector<std::vector<Eigen::VectorXd>> main(5);
+  for (int f = 0; f < 5; ++f)
+    for (int l = 1; l < count[f]; ++l) {
+      Eigen::VectorXd v(n);
+      for (int i = 0; i < n; ++i) v(i) = level[f][cells[i]] == l ? 1.0 : 0.0;
+      main[f].push_back(v);
+      cols.push_back(v);
+    }
+  for (int f = 0; f < 5; ++f)
+    for (int g = f + 1; g < 5; ++g) {
+      if (f == 0 && g == 2) continue;  // light × angle: no camera law of the registry has it
+      for (const auto& a : main[f])
+        for (const auto& b : main[g]) cols.push_back(a.cwiseProduct(b));
+    }
+  Eigen::MatrixXd x(n, static_cast<int>(cols.size()));
+  for (size_t j = 0; j < cols.size(); ++j) x.col(static_cast<int>(j)) = cols[j];
+  if (n == 0) return x;
+  // Keep a set of independent columns (pivoted QR).
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(x);
+  qr.setThreshold(1e-9);
+  const int rank = static_cast<int>(qr.rank());
+  Eigen::MatrixXd out(n, rank);
+  for (int j = 0; j < rank; ++j) out.col(j) = x.col(qr.colsPermutation().indices()(j));
+  return out;
+}
+
+// One metric's REML problem over test-point blocks, with the per-block sums that make every
+// evaluation O(T·p²): V_t = D_t + τ_t²·11ᵀ, V_t⁻¹ = D_t⁻¹ − c_t·D_t⁻¹11ᵀD_t⁻¹,
+// c_t = τ_t² / (1 + τ_t²·S_t), S_t = 1ᵀD_t⁻¹1.
+struct Reml {
+  int p = 0;
+  Eigen::MatrixXd xdx;  // Σ X_tᵀD⁻¹X_t
+  Eigen::VectorXd xdy;  // Σ X_tᵀD⁻¹y
+  double ydy = 0, log_d = 0;
+  std::vector<Eigen::VectorXd> v;  // [t] X_tᵀD⁻¹1
+  std::vector<double> s, w;        // [t] S_t, 1ᵀD⁻¹y
+  std::vector<double> f0, f1;      // [t] the law's basis at the point's distance
+  std::vector<double> free_tau;    // [t] > 0: a flagged point's own (large) scatter
+
+  double Tau(int t, double a, double b) const {
+    return free_tau[t] > 0 ? free_tau[t] : a * f0[t] + b * f1[t];
+  }
+
+  // −2 × restricted log-likelihood (constants dropped); beta and c_inv on request.
+  double Objective(double a, double b, Eigen::VectorXd* beta = nullptr,
+                   Eigen::MatrixXd* c_inv = nullptr) const {
+    Eigen::MatrixXd xvx = xdx;
+    Eigen::VectorXd xvy = xdy;
+    double yvy = ydy, logv = log_d;
+    for (size_t t = 0; t < s.size(); ++t) {
+      const double tau = Tau(static_cast<int>(t), a, b), t2 = tau * tau;
+      const double c = t2 / (1 + t2 * s[t]);
+      xvx.noalias() -= c * v[t] * v[t].transpose();
+      xvy -= c * w[t] * v[t];
+      yvy -= c * w[t] * w[t];
+      logv += std::log1p(t2 * s[t]);
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(xvx);
+    const Eigen::VectorXd bh = ldlt.solve(xvy);
+    double logdet = 0;
+    for (int i = 0; i < p; ++i) logdet += std::log(std::max(ldlt.vectorD()(i), 1e-300));
+    if (beta) *beta = bh;
+    if (c_inv) *c_inv = ldlt.solve(Eigen::MatrixXd::Identity(p, p));
+    return logv + logdet + yvy - xvy.dot(bh);
+  }
+};
+
+// The law (a, b ≥ 0) minimizing the REML objective: a grid in log steps (0 included), then a
+// pattern search about its best node.
+void FitLaw(const Reml& r, bool two, double scale_a, double scale_b, double* a_out,
+            double* b_out) {
+  std::vector<double> ga = {0}, gb = {0};
+  for (int i = 0; i < 16; ++i) ga.push_back(scale_a * std::pow(10.0, -3.0 + 0.25 * i));
+  if (two)
+    for (int i = 0; i < 16; ++i) gb.push_back(scale_b * std::pow(10.0, -3.0 + 0.25 * i));
+  double best = INFINITY, a = 0, b = 0;
+  for (double x : ga)
+    for (double y : gb) {
+      const double v = r.Objective(x, y);
+      if (v < best) best = v, a = x, b = y;
+    }
+  double step = std::log(std::pow(10.0, 0.25));
+  for (int it = 0; it < 40 && step > 1e-3; ++it) {
+    bool moved = false;
+    const double cand[4][2] = {{a * std::exp(step), b}, {a * std::exp(-step), b},
+                               {a, b * std::exp(step)}, {a, b * std::exp(-step)}};
+    for (int j = 0; j < (two ? 4 : 2); ++j) {
+      const double v = r.Objective(cand[j][0], cand[j][1]);
+      if (v < best) best = v, a = cand[j][0], b = cand[j][1], moved = true;
+    }
+    if (!moved) step *= 0.5;
+  }
+  *a_out = a, *b_out = b;
+}
+
+}  // namespace
+
+std::vector<int> TestPoints(const Design& d, int* num_points) {
+  std::map<std::string, int> ids;
+  std::vector<int> out;
+  for (const sim::Cell& c : d.cells) {
+    std::ostringstream key;
+    key << c.light << '|' << c.distance_m << '|' << c.angle_deg;
+    const auto it = ids.emplace(key.str(), static_cast<int>(ids.size())).first;
+    out.push_back(it->second);
+  }
+  *num_points = static_cast<int>(ids.size());
+  return out;
+}
+
+double PlacementEstimate::Law(int k, int metric, double distance_m) const {
+  if (a.empty()) return 0;
+  if (metric == kMedianBias) return a[k] + b[k] * distance_m;
+  return a[k] * NoiseShape(metric, distance_m);
+}
+
+PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
+                                    const NoiseEstimate& noise, const std::vector<char>& train,
+                                    double alpha) {
+  PlacementEstimate pe;
+  pe.point = TestPoints(d, &pe.num_points);
+  const int np = pe.num_points;
+  pe.point_distance_m.assign(np, 0);
+  pe.point_angle_deg.assign(np, 0);
+  pe.point_light.assign(np, "");
+  for (int c = 0; c < d.num_cells(); ++c) {
+    pe.point_distance_m[pe.point[c]] = d.cells[c].distance_m;
+    pe.point_angle_deg[pe.point[c]] = d.cells[c].angle_deg;
+    pe.point_light[pe.point[c]] = d.cells[c].light;
+  }
+  const int kk = d.num_metrics();
+  pe.a.assign(kk, 0);
+  pe.b.assign(kk, 0);
+  pe.points_used.assign(kk, 0);
+  pe.departure.assign(kk, std::vector<double>(np, NAN));
+  pe.departure_z.assign(kk, std::vector<double>(np, NAN));
+  pe.flagged.assign(kk, std::vector<char>(np, 0));
+  pe.tau.assign(kk, std::vector<double>(np, 0.0));
+  const double z_crit = TwoSidedCritical(alpha / std::max(1, np));
+
+  for (int k = 0; k < kk; ++k) {
+    const int metric = d.metrics[k];
+    std::vector<int> cells;
+    for (int c = 0; c < d.num_cells(); ++c) {
+      const size_t o = static_cast<size_t>(c) * kk + k;
+      if (train[c] && std::isfinite(d.real[o]) && std::isfinite(sims.base[o])) cells.push_back(c);
+    }
+    std::vector<char>& flag = pe.flagged[k];
+    // Every recording stays in the fit (the fixed effects keep their rank); a flagged point's
+    // placement gets a free, large variance, so that its mean informs neither β nor the law,
+    // while its within-point contrasts (presets, emitter) still do.
+    std::vector<int> rows = cells;
+    std::stable_sort(rows.begin(), rows.end(),
+                     [&](int x, int y) { return pe.point[x] < pe.point[y]; });
+    const Eigen::MatrixXd x = FixedEffects(d, rows);
+    Reml r;
+    r.p = static_cast<int>(x.cols());
+    r.xdx = Eigen::MatrixXd::Zero(r.p, r.p);
+    r.xdy = Eigen::VectorXd::Zero(r.p);
+    std::vector<int> block_point;
+    std::vector<double> block_mean;  // the point's weighted mean residual (raw)
+    double sum_sq = 0, mean_d = 0;
+    for (size_t i = 0; i < rows.size();) {
+      const int t = pe.point[rows[i]];
+      Eigen::VectorXd v = Eigen::VectorXd::Zero(r.p);
+      double s = 0, w = 0;
+      for (; i < rows.size() && pe.point[rows[i]] == t; ++i) {
+        const int c = rows[i];
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        const double y = d.real[o] - sims.base[o];
+        const double sd = noise.Of(d, sims, c, k);
+        const double inv = 1.0 / (sd * sd);
+        const Eigen::VectorXd xi = x.row(static_cast<int>(i)).transpose();
+        r.xdx.noalias() += inv * xi * xi.transpose();
+        r.xdy += inv * y * xi;
+        r.ydy += inv * y * y;
+        r.log_d += std::log(sd * sd);
+        v += inv * xi;
+        s += inv;
+        w += inv * y;
+        sum_sq += y * y;
+      }
+      r.v.push_back(v);
+      r.s.push_back(s);
+      r.w.push_back(w);
+      const double dist = pe.point_distance_m[t];
+      r.f0.push_back(metric == kMedianBias ? 1.0 : NoiseShape(metric, dist));
+      r.f1.push_back(metric == kMedianBias ? dist : 0.0);
+      r.free_tau.push_back(0.0);
+      block_point.push_back(t);
+      mean_d += dist;
+    }
+    const int blocks = static_cast<int>(block_point.size());
+    if (blocks == 0 || r.p >= static_cast<int>(rows.size())) {
+      pe.points_used[k] = 0;  // no placement degrees of freedom once the fixed effects are in
+      continue;
+    }
+    mean_d /= blocks;
+    const double rms = std::sqrt(sum_sq / static_cast<double>(rows.size())) + 1e-12;
+    double a = 0, b = 0;
+    for (int iter = 0; iter < 8; ++iter) {
+      FitLaw(r, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3), &a, &b);
+      Eigen::VectorXd beta;
+      Eigen::MatrixXd c_inv;
+      r.Objective(a, b, &beta, &c_inv);
+      bool changed = false;
+      int used = 0;
+      for (int j = 0; j < blocks; ++j) {
+        const int t = block_point[j];
+        const double s = r.s[j];
+        const double m = (r.w[j] - r.v[j].dot(beta)) / s;  // mean residual about X·β
+        const double tau = a * r.f0[j] + b * r.f1[j];
+        // Var(m_t) = τ² + 1/S_t ∓ the fixed effects' share (− for a point informing β, + for a
+        // flagged one, predicted from the others).
+        const double lev = r.v[j].dot(c_inv * r.v[j]) / (s * s);
+        const double own = tau * tau + 1.0 / s;
+        const double var = own + (flag[t] ? lev : -lev);
+        pe.departure[k][t] = m;
+        pe.departure_z[k][t] = var > 1e-3 * own ? m / std::sqrt(var) : 0.0;
+        const bool beyond = std::fabs(pe.departure_z[k][t]) > z_crit;
+        if (beyond != static_cast<bool>(flag[t])) changed = true;
+        flag[t] = beyond;
+        r.free_tau[j] = beyond ? 1e3 * rms : 0.0;
+        used += !beyond;
+      }
+      pe.a[k] = a, pe.b[k] = b;
+      pe.points_used[k] = used;
+      if (!changed) break;
+    }
+    for (int t = 0; t < np; ++t) {
+      const double law = pe.Law(k, metric, pe.point_distance_m[t]);
+      pe.tau[k][t] = flag[t] && std::isfinite(pe.departure[k][t])
+                         ? std::max(law, std::fabs(pe.departure[k][t]))
+                         : law;
+    }
+  }
+  return pe;
+}
+
+}  // namespace depthbias::gap

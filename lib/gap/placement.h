@@ -1,0 +1,70 @@
+#pragma once
+// Placement and session as a variance component. Every test point (light, distance, angle) is
+// one panel placement, shared by all its recordings (both presets, emitter on and off): a tape
+// error, a stand set a little off, a change of light between sessions moves all of them
+// together. That is neither replicate noise (the emitter twins share it, so their difference
+// cannot show it) nor a camera effect (it does not repeat from one test point to the next).
+//
+// Per compared metric k the residual y − sim (the base simulation) of a recording i at test
+// point t is modelled as
+//   y − sim = X·β + u_t + e_i,   u_t ~ N(0, τ_k(D_t)²),   e_i ~ N(0, σ_i²)              (1)
+// with σ_i the replicate noise (noise.h, known), X the fixed effects every camera law of the
+// registry lives in (main effects and two-factor interactions of light, distance, angle,
+// preset and emitter, but light × angle: no law of the registry makes the light change how the
+// angle acts, while one session's stand set off at one angle does), and τ the placement scatter's law in the test point's distance D:
+//   median bias:  τ(D) = a + b·D  [m]   (a: tape and stand, independent of range; b·D: a
+//                 distance meaning or aiming error, and depth read through a panel set a
+//                 fraction of a degree off, which grow with range)
+//   other metrics: τ(D) = a · (D / 10 m)^e, e the metric's noise exponent (one parameter)
+// estimated by restricted maximum likelihood (REML: the fixed effects' degrees of freedom are
+// not taken for scatter). Only the three-factor part of light × distance × angle that no
+// two-factor law explains is counted as placement, so a camera law of the registry stays a
+// fixed effect and is judged against τ, not absorbed by it.
+//
+// Heavy tail: a test point whose departure (its recordings' mean residual about X·β) exceeds
+// the law at p < alpha / test points (Bonferroni) is flagged, left out of the law's estimate
+// (iterated until no point changes), and given its own departure as its scatter, so that one
+// misplaced panel is reported as such and never taken for a camera effect.
+
+#include <string>
+#include <vector>
+
+#include "gap/design.h"
+#include "gap/noise.h"
+#include "gap/simulations.h"
+
+namespace depthbias::gap {
+
+// Test point of every cell (light, distance, angle), numbered in first-seen order.
+std::vector<int> TestPoints(const Design& design, int* num_points);
+
+struct PlacementEstimate {
+  std::vector<int> point;                 // [cell] test point
+  int num_points = 0;
+  std::vector<double> point_distance_m;   // [point]
+  std::vector<double> point_angle_deg;
+  std::vector<std::string> point_light;
+  // Per compared metric k: the law τ_k(D) = a_k·f(D) + b_k·D, f = 1 for the median bias,
+  // (D / 10 m)^e for the others (b = 0).
+  std::vector<double> a, b;
+  std::vector<int> points_used;           // [k] test points the law was estimated from
+  std::vector<std::vector<double>> departure;    // [k][point] mean residual about X·β
+  std::vector<std::vector<double>> departure_z;  // [k][point] over its sd under the law
+  std::vector<std::vector<char>> flagged;        // [k][point] beyond the law (Bonferroni)
+  std::vector<std::vector<double>> tau;          // [k][point] scatter used in the covariance
+
+  // The law at distance D for compared metric k (metric: its Metric value).
+  double Law(int k, int metric, double distance_m) const;
+  double Tau(int k, int cell) const {
+    return tau.empty() ? 0.0 : tau[k][point[cell]];
+  }
+  bool empty() const { return tau.empty(); }
+};
+
+// The scatter of every compared metric, from the cells marked in `train` (recordings whose
+// residual is finite). alpha: the significance at which a test point is flagged.
+PlacementEstimate EstimatePlacement(const Design& design, const Simulations& sims,
+                                    const NoiseEstimate& noise, const std::vector<char>& train,
+                                    double alpha);
+
+}  // namespace depthbias::gap

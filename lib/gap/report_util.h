@@ -1,0 +1,46 @@
+#pragma once
+// Formatting shared by report.cpp and headline.cpp (private to the gap module's text output).
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "gap/diagnose.h"
+
+namespace depthbias::gap::text {
+
+inline std::string Num(double v, int digits = 3) {
+  if (!std::isfinite(v)) return "–";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
+}
+
+inline std::string Signed(double v, int digits = 3) {
+  return (std::isfinite(v) && v > 0 ? "+" : "") + Num(v, digits);
+}
+
+inline std::string Pct(double v) {
+  if (!std::isfinite(v)) return "–";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f %%", v);
+  return buf;
+}
+
+inline double ShrinkPct(const GapStat& before, const GapStat& after) {
+  return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : NAN;
+}
+
+// A term's parameters: "p v, q w" (per scenario "S: …; T: …"), with 95 % intervals and a
+// "(grid edge)" mark on request; with hide_edges a value on the grid's edge is not given (it is
+// no measurement) but said to be there.
+std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
+                       bool hide_edges = false);
+
+// The headline for a safety engineer: range error in metres and its direction, placement,
+// emitter, what is selected or unexplained, the nested simulated shrink.
+std::string Headline(const DiagnoseResult& r);
+// The report's sections on placement, emitter, nested hold-out, ambiguity and the open world.
+std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p);
+
+}  // namespace depthbias::gap::text

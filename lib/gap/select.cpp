@@ -1,0 +1,340 @@
+#include "gap/select.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+namespace depthbias::gap {
+namespace {
+
+double Logit(double p) {
+  p = std::clamp(p, 1e-6, 1 - 1e-6);
+  return std::log(p / (1 - p));
+}
+double Logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+// z = (y − μ) / σ of the valid observations (NaN elsewhere).
+}  // namespace
+
+std::vector<double> Scaled(const GapModel& m, const std::vector<double>& mu) {
+  std::vector<double> z(mu.size(), NAN);
+  for (size_t o = 0; o < mu.size(); ++o)
+    if (m.valid(o) && std::isfinite(mu[o])) z[o] = (m.y(o) - mu[o]) / m.noise(o);
+  return z;
+}
+
+GapStat Stat(const GapModel& m, const std::vector<double>& z, const std::vector<char>& cells) {
+  const int k_count = m.num_metrics();
+  GapStat s;
+  s.mean_sq.assign(k_count, 0.0);
+  s.n.assign(k_count, 0);
+  double total = 0;
+  for (size_t o = 0; o < z.size(); ++o) {
+    if (!cells[o / k_count] || !m.valid(o) || !std::isfinite(z[o])) continue;
+    s.mean_sq[o % k_count] += z[o] * z[o];
+    ++s.n[o % k_count];
+    total += z[o] * z[o];
+    ++s.count;
+  }
+  for (int k = 0; k < k_count; ++k) s.mean_sq[k] = s.n[k] ? s.mean_sq[k] / s.n[k] : NAN;
+  s.overall = s.count ? total / s.count : NAN;
+  return s;
+}
+
+double Shrink(const GapStat& before, const GapStat& after) {
+  return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : 0.0;
+}
+
+// Dispersion of each metric about a prediction: the φ ≥ 1 at which the mean deviance of its
+// observations, 2ρ(z/√φ), equals its expectation under unit normal noise (a Pearson estimate
+// made robust by the same Huber loss the fit uses).
+std::vector<double> Dispersion(const GapModel& m, const std::vector<double>& mu,
+                               const std::vector<char>& cells) {
+  const int k_count = m.num_metrics();
+  const double hk = m.settings().huber_k;
+  auto dev = [hk](double r) {
+    return hk <= 0 || std::fabs(r) <= hk ? r * r : 2 * hk * std::fabs(r) - hk * hk;
+  };
+  // E[2ρ(z)] for z ~ N(0, 1), by the midpoint rule over ±8.
+  double expected = 0;
+  for (int i = 0; i < 16000; ++i) {
+    const double z = -8 + (i + 0.5) * 1e-3;
+    expected += dev(z) * std::exp(-0.5 * z * z) / std::sqrt(2 * M_PI) * 1e-3;
+  }
+  const std::vector<double> z = Scaled(m, mu);
+  std::vector<double> phi(k_count, 1.0);
+  for (int k = 0; k < k_count; ++k) {
+    std::vector<double> a;
+    for (size_t o = k; o < z.size(); o += k_count)
+      if (cells[o / k_count] && std::isfinite(z[o])) a.push_back(z[o]);
+    if (a.empty()) continue;
+    auto excess = [&](double log_phi) {
+      const double s = std::exp(-0.5 * log_phi);
+      double sum = 0;
+      for (double v : a) sum += dev(v * s);
+      return sum / static_cast<double>(a.size()) - expected;
+    };
+    if (excess(0) <= 0) continue;
+    double lo = 0, hi = 1;
+    while (excess(hi) > 0 && hi < 60) hi *= 2;
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (excess(mid) > 0 ? lo : hi) = mid;
+    }
+    phi[k] = std::exp(0.5 * (lo + hi));
+  }
+  return phi;
+}
+
+namespace {
+
+// The node index nearest a value on an axis.
+int NearestNode(const Axis& a, double value) {
+  int best = 0;
+  for (size_t i = 1; i < a.nodes.size(); ++i)
+    if (std::fabs(a.nodes[i] - value) < std::fabs(a.nodes[best] - value))
+      best = static_cast<int>(i);
+  return best;
+}
+
+// Signature of a candidate: its change of every valid observation at its reference size (shared
+// over the cells), in weighted noise units, with the calibration's directions of each scenario
+// projected out. r2_sigma, r2_p, r2_both: the share of its squared norm those directions take.
+std::vector<double> Signature(const GapModel& m, int candidate, double* r2_sigma, double* r2_p,
+                              double* r2_both) {
+  const Design& d = m.design();
+  const Simulations& s = m.sims();
+  const Candidate& cand = m.surface(candidate).candidate;
+  Term term{candidate, false, {std::vector<int>(cand.axes.size(), -1)}};
+  double u[2] = {0, 0};
+  for (size_t a = 0; a < cand.axes.size(); ++a) {
+    if (cand.axes[a].discrete)
+      term.discrete_node[0][a] = NearestNode(cand.axes[a], cand.axes[a].reference);
+    u[a] = m.ToCoord(candidate, static_cast<int>(a), cand.axes[a].reference);
+  }
+  const int k_count = m.num_metrics();
+  std::vector<double> sig(m.num_obs(), 0.0);
+  double norm = 0, along_sigma = 0, along_p = 0, along_both = 0;
+  for (int sc = 0; sc < d.num_scenarios(); ++sc) {
+    std::vector<size_t> obs;
+    for (int c = 0; c < d.num_cells(); ++c)
+      if (d.scenario[c] == sc)
+        for (int k = 0; k < k_count; ++k)
+          if (m.valid(static_cast<size_t>(c) * k_count + k))
+            obs.push_back(static_cast<size_t>(c) * k_count + k);
+    if (obs.empty()) continue;
+    Eigen::VectorXd v(obs.size());
+    Eigen::MatrixXd a(obs.size(), 2);
+    for (size_t i = 0; i < obs.size(); ++i) {
+      const double w = m.weight(obs[i]);
+      v(i) = m.Delta(term, u, obs[i]) * w;
+      a(i, 0) = s.jac_log_sigma[obs[i]] * w;
+      a(i, 1) = s.jac_logit_p[obs[i]] * w;
+    }
+    auto projected = [&](const Eigen::MatrixXd& cols) {
+      const Eigen::MatrixXd g = cols.transpose() * cols +
+                                1e-12 * Eigen::MatrixXd::Identity(cols.cols(), cols.cols());
+      return Eigen::VectorXd(cols * g.ldlt().solve(cols.transpose() * v));
+    };
+    const Eigen::VectorXd both = projected(a);
+    norm += v.squaredNorm();
+    along_sigma += projected(a.col(0)).squaredNorm();
+    along_p += projected(a.col(1)).squaredNorm();
+    along_both += both.squaredNorm();
+    const Eigen::VectorXd rest = v - both;
+    for (size_t i = 0; i < obs.size(); ++i) sig[obs[i]] = rest(i);
+  }
+  *r2_sigma = norm > 0 ? along_sigma / norm : 0;
+  *r2_p = norm > 0 ? along_p / norm : 0;
+  *r2_both = norm > 0 ? along_both / norm : 0;
+  return sig;
+}
+
+double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  double ab = 0, aa = 0, bb = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    ab += a[i] * b[i];
+    aa += a[i] * a[i];
+    bb += b[i] * b[i];
+  }
+  return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
+}
+
+}  // namespace
+
+Selection Select(GapModel& model, const std::vector<char>& train, const std::vector<int>& fold,
+                 int num_folds, const DiagnoseParams& params) {
+  Selection r;
+  const Design& design = model.design();
+  const Simulations& sims = model.sims();
+  const int n_cand = static_cast<int>(sims.surfaces.size());
+  const std::vector<double> z_base = Scaled(model, sims.base);
+  const GapStat baseline = Stat(model, z_base, train);
+
+  // The calibrated base: the reference every effect is judged against.
+  model.SetDispersion(std::vector<double>(model.num_metrics(), 1.0));
+  for (int i = 0; i < n_cand; ++i) model.SetAbsorbs(i, 0);
+  ModelFit m0 = FitTerms(model, {}, train);
+  if (!m0.success) {
+    r.message = "calibration: " + m0.message;
+    return r;
+  }
+  model.SetDispersion(Dispersion(model, model.Predict(m0), train));
+  m0 = FitTerms(model, {}, train, &m0);
+  HeldOut m0_ho = CrossValidate(model, {}, fold, num_folds, m0, train);
+  if (!m0.success || !m0_ho.success) {
+    r.message = "calibration: " + (m0.success ? m0_ho.message : m0.message);
+    return r;
+  }
+  r.dispersion = model.dispersion();
+  const double log_n = std::log(static_cast<double>(m0.num_obs));
+
+  // Signatures, and the calibration components each candidate duplicates.
+  std::vector<double> r2_both(n_cand);
+  r.r2_sigma.assign(n_cand, 0);
+  r.r2_p.assign(n_cand, 0);
+  std::vector<std::vector<double>> signature(n_cand);
+  const double r2_limit = params.absorb_r * params.absorb_r;
+  for (int i = 0; i < n_cand; ++i) {
+    signature[i] = Signature(model, i, &r.r2_sigma[i], &r.r2_p[i], &r2_both[i]);
+    model.SetAbsorbs(i, (r.r2_sigma[i] >= r2_limit ? 1 : 0) | (r.r2_p[i] >= r2_limit ? 2 : 0));
+  }
+
+  // Every candidate alone, shared and per scenario.
+  for (int i = 0; i < n_cand; ++i) {
+    EffectResult e;
+    e.name = sims.surfaces[i].candidate.effect;
+    ModelFit shared = FitCandidate(model, i, false, train);
+    ModelFit per;
+    if (design.num_scenarios() > 1) per = FitCandidate(model, i, true, train, &shared);
+    auto dbic = [&](const ModelFit& f) {
+      return f.success ? m0.Deviance() - f.Deviance() - (f.num_params - m0.num_params) * log_n
+                       : -INFINITY;
+    };
+    e.delta_bic_shared = dbic(shared);
+    e.delta_bic_per_scenario = per.success ? dbic(per) : -INFINITY;
+    if (!shared.success && !per.success) {
+      r.message = e.name + ": " + shared.message;
+      return r;
+    }
+    e.per_scenario = e.delta_bic_per_scenario > e.delta_bic_shared;
+    const ModelFit& f = e.per_scenario ? per : shared;
+    e.fit = f.terms[0];
+    e.delta_bic = std::max(e.delta_bic_shared, e.delta_bic_per_scenario);
+    const HeldOut ho = CrossValidate(model, {e.fit.term}, fold, num_folds, f, train);
+    if (!ho.success) {
+      r.message = e.name + ": " + ho.message;
+      return r;
+    }
+    e.heldout_gain = m0_ho.data_deviance - ho.data_deviance;
+    e.in_sample = Stat(model, Scaled(model, model.Predict(f)), train);
+    e.heldout = Stat(model, Scaled(model, ho.mu), ho.cells);
+    e.shrink_in_sample_pct = Shrink(baseline, e.in_sample);
+    e.shrink_heldout_pct = Shrink(Stat(model, z_base, ho.cells), e.heldout);
+    e.earns = e.delta_bic > 0 && e.heldout_gain > 0;
+    e.signature = signature[i];
+    r.effects.push_back(std::move(e));
+  }
+
+  // Confounded pairs: between effects, and of an effect with the calibration.
+  for (int i = 0; i < n_cand; ++i) {
+    if (model.Absorbs(i) & 1)
+      r.confounded.push_back({r.effects[i].name, "calibration:sigma_d", std::sqrt(r.r2_sigma[i])});
+    if (model.Absorbs(i) & 2)
+      r.confounded.push_back({r.effects[i].name, "calibration:hole_prob", std::sqrt(r.r2_p[i])});
+    for (int j = i + 1; j < n_cand; ++j) {
+      const double c = Correlation(r.effects[i].signature, r.effects[j].signature);
+      r.correlations.push_back({r.effects[i].name, r.effects[j].name, c});
+      if (std::fabs(c) >= params.confounded_r)
+        r.confounded.push_back({r.effects[i].name, r.effects[j].name, c});
+    }
+  }
+  auto confounded = [&](int i, int j) {
+    for (const auto& c : r.confounded)
+      if ((c.a == r.effects[i].name && c.b == r.effects[j].name) ||
+          (c.b == r.effects[i].name && c.a == r.effects[j].name))
+        return true;
+    return false;
+  };
+
+  // Forward selection from the calibrated base. An effect along a calibration direction is
+  // never selected: the table cannot tell it from the recalibration.
+  std::vector<int> order(n_cand);
+  for (int i = 0; i < n_cand; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return r.effects[a].heldout_gain > r.effects[b].heldout_gain;
+  });
+  std::vector<Term> terms;
+  ModelFit current = m0;
+  HeldOut current_ho = m0_ho;
+  for (int step = 0; step < params.max_selected; ++step) {
+    if (step > 0) {  // dispersion about the current model
+      model.SetDispersion(Dispersion(model, model.Predict(current), train));
+      current = FitTerms(model, terms, train, &current);
+      current_ho = CrossValidate(model, terms, fold, num_folds, current, train);
+      if (!current.success || !current_ho.success) break;
+    }
+    int best = -1;
+    double best_dbic = 0, best_gain = 0;  // the largest held-out gain among those earning both
+    ModelFit best_fit;
+    HeldOut best_ho;
+    for (int i : order) {
+      if (model.Absorbs(i)) continue;
+      if (std::find(r.chosen.begin(), r.chosen.end(), i) != r.chosen.end()) continue;
+      bool clash = false;
+      for (int j : r.chosen) clash = clash || confounded(i, j);
+      if (clash) continue;
+      std::vector<Term> trial = terms;
+      trial.push_back(r.effects[i].fit.term);
+      ModelFit start = current;
+      start.terms.push_back(r.effects[i].fit);
+      const ModelFit f = FitTerms(model, trial, train, &start);
+      if (!f.success) continue;
+      const double dbic =
+          current.Deviance() - f.Deviance() - (f.num_params - current.num_params) * log_n;
+      if (dbic <= 0) continue;
+      HeldOut ho = CrossValidate(model, trial, fold, num_folds, f, train);
+      if (!ho.success) continue;
+      const double gain = current_ho.data_deviance - ho.data_deviance;
+      if (gain <= best_gain) continue;
+      best = i, best_dbic = dbic, best_gain = gain, best_fit = f, best_ho = std::move(ho);
+    }
+    if (best < 0) break;
+    r.chosen.push_back(best);
+    terms.push_back(r.effects[best].fit.term);
+    current = best_fit;
+    current_ho = std::move(best_ho);
+    r.steps.push_back({r.effects[best].name, r.effects[best].per_scenario, best_dbic, best_gain});
+  }
+  r.m0 = std::move(m0);
+  r.m0_ho = std::move(m0_ho);
+  r.current = std::move(current);
+  r.current_ho = std::move(current_ho);
+  r.success = true;
+  return r;
+}
+
+std::vector<sim::SimParams> SelectedParams(const Simulations& sims, const sim::SimParams& base,
+                                           const ModelFit& fit, int num_scenarios) {
+  std::vector<sim::SimParams> per(num_scenarios, base);
+  std::string why;
+  for (int s = 0; s < num_scenarios; ++s) {
+    per[s].sensor = sims.sensor;
+    auto& sc = per[s].sensor.scenarios[s];
+    if (static_cast<int>(fit.nuisance.size()) == num_scenarios) {
+      sc.sigma_d_px *= std::exp(fit.nuisance[s][0]);
+      sc.invalid_prob = Logistic(Logit(sc.invalid_prob) + fit.nuisance[s][1]);
+    }
+    std::vector<sim::EffectSpec> specs;
+    for (const TermFit& t : fit.terms)
+      specs.push_back(SpecAt(sims.surfaces[t.term.candidate].candidate,
+                             t.values[t.term.per_scenario ? s : 0]));
+    if (!sim::BuildDepartures(specs, &per[s].departures, &why))
+      throw std::invalid_argument("the selected effects: " + why);
+  }
+  return per;
+}
+
+}  // namespace depthbias::gap

@@ -1,0 +1,49 @@
+#pragma once
+// One pass of the diagnosis on a set of cells (diagnose.h, steps 3–4): the calibrated base, every
+// candidate alone, their signatures and confounding, and forward selection, all fitted on the
+// cells marked in `train` and cross-validated over `fold` within them. The whole table runs it
+// once; the nested cross-validation runs it once per outer fold, on a model whose noise and
+// placement were estimated without the fold.
+
+#include <string>
+#include <vector>
+
+#include "gap/diagnose.h"
+#include "gap/fit.h"
+
+namespace depthbias::gap {
+
+struct Selection {
+  bool success = false;
+  std::string message;
+  ModelFit m0;                         // the calibrated base
+  HeldOut m0_ho;
+  std::vector<double> dispersion;      // φ about the calibrated base
+  std::vector<EffectResult> effects;   // every candidate alone, in the candidates' order
+  std::vector<double> r2_sigma, r2_p;  // share of each signature along the calibration
+  std::vector<Confounded> confounded, correlations;
+  std::vector<SelectionStep> steps;
+  std::vector<int> chosen;             // candidates selected, in order
+  ModelFit current;                    // the selection fitted together
+  HeldOut current_ho;
+};
+
+// z = (y − μ) / noise of the valid observations (NaN elsewhere).
+std::vector<double> Scaled(const GapModel& model, const std::vector<double>& mu);
+// Mean z² over the marked cells.
+GapStat Stat(const GapModel& model, const std::vector<double>& z, const std::vector<char>& cells);
+double Shrink(const GapStat& before, const GapStat& after);
+// Each metric's dispersion φ ≥ 1 about a prediction, over the marked cells.
+std::vector<double> Dispersion(const GapModel& model, const std::vector<double>& mu,
+                               const std::vector<char>& cells);
+
+// Sets the model's dispersion (about the calibrated base, then about each step's model) and its
+// calibration-absorbing candidates; the model's design and simulations are the whole table's.
+Selection Select(GapModel& model, const std::vector<char>& train, const std::vector<int>& fold,
+                 int num_folds, const DiagnoseParams& params);
+
+// The selection's effects and calibration as the simulator takes them, one set per scenario.
+std::vector<sim::SimParams> SelectedParams(const Simulations& sims, const sim::SimParams& base,
+                                           const ModelFit& fit, int num_scenarios);
+
+}  // namespace depthbias::gap
