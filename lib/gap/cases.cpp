@@ -267,7 +267,10 @@ std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
     for (const auto& [e, v] : o.recovered) rec += (rec.empty() ? "" : "; ") + e + ": " + v;
     s += "| " + o.truth.name + " | " + (truth.empty() ? "none" : truth) + " | " +
          list(o.selected) + " | " + (rec.empty() ? "-" : rec) + " | " +
-         (std::isfinite(o.max_rel_error) ? Num(100 * o.max_rel_error, 2) + " %" : "-") + " | " +
+         (std::isfinite(o.max_rel_error) ? Num(100 * o.max_rel_error, 2) + " %"
+          : std::isnan(o.max_rel_error)  ? std::string("-")
+                                         : std::string("∞ (not selected, or a width differs)")) +
+         " | " +
          (std::isfinite(o.shrink_simulated_pct) ? Num(o.shrink_simulated_pct, 3) + " %"
                                                 : "not published") +
          " | " + o.unexplained + " | " + (o.pass ? "yes" : "**no**") + " | " + o.why + " |\n";
