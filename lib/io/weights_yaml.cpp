@@ -314,7 +314,10 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
     // model then claims no margin. A negative or infinite scatter is refused.
     if (gn["residual_std_m"]) {
       g.residual_std_m =
-          r.Checked(gn["residual_std_m"], p + ".residual_std_m", rules::kSigmaM, true);
+          r.Checked(gn["residual_std_m"], p + ".residual_std_m", rules::kSpreadM, true);
+      if (std::isinf(g.residual_std_m * g.residual_std_m))
+        r.Fail(p + ".residual_std_m", records::NumberText(g.residual_std_m) +
+                                          " m: its square (a variance) overflows");
     }
     if (const YAML::Node mn = gn["margin"]; mn) {
       const std::string mp = p + ".margin";
