@@ -7,6 +7,9 @@
 # Safe to run again: it installs only what is missing. Every step that fails says which step it
 # was and what to do, on one line, and the script exits non-zero.
 # Environment: WITH_BENCH=1 also installs the benchmark-only peer (Open3D) into .venv.
+#   WITH_SLURM=1 also installs SLURM with munge and MariaDB (its accounting database) from Debian,
+#   and the workflow's SLURM executor (workflow/requirements-cluster.txt) into .venv: what
+#   scripts/test_workflow_slurm.sh needs to run the workflow on a single-node SLURM.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -24,6 +27,8 @@ DEB_PACKAGES=(
   clang libclang-rt-14-dev
   libusb-1.0-0 python3 python3-venv python3-dev
 )
+SLURM_PACKAGES=(slurm-wlm slurmdbd munge mariadb-server)
+[ "${WITH_SLURM:-0}" = "1" ] && DEB_PACKAGES+=("${SLURM_PACKAGES[@]}")
 
 fail() {  # fail STEP WHAT-TO-DO
   echo "setup: step '$1' failed: $2" >&2
@@ -90,5 +95,19 @@ if [ "${WITH_BENCH:-0}" = "1" ] && ! "$PY" -c "import open3d" >/dev/null 2>&1; t
   echo "setup: installing open3d into $VENV (benchmark only)"
   "$PY" -m pip install -q --disable-pip-version-check open3d >/tmp/depthbias-pip-bench.log 2>&1 ||
     fail "pip install open3d" "see /tmp/depthbias-pip-bench.log"
+fi
+
+# Optional: the workflow's SLURM executor plugin, when the file changed since its last install.
+CLUSTER_REQUIREMENTS=$ROOT/workflow/requirements-cluster.txt
+CLUSTER_STAMP=$VENV/.depthbias-requirements-cluster
+if [ "${WITH_SLURM:-0}" = "1" ]; then
+  want_sum=$(sha256sum "$CLUSTER_REQUIREMENTS" | cut -d' ' -f1)
+  if [ ! -f "$CLUSTER_STAMP" ] || [ "$(cat "$CLUSTER_STAMP")" != "$want_sum" ]; then
+    echo "setup: installing workflow/requirements-cluster.txt into $VENV"
+    "$PY" -m pip install -q --disable-pip-version-check -r "$CLUSTER_REQUIREMENTS" \
+        >/tmp/depthbias-pip-cluster.log 2>&1 ||
+      fail "pip install (cluster)" "see /tmp/depthbias-pip-cluster.log"
+    echo "$want_sum" > "$CLUSTER_STAMP"
+  fi
 fi
 exit 0

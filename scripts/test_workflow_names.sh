@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The workflow (workflow/Snakefile) on hostile names: recordings and unit folders named by
-# whoever copied the files. Three runs on small simulated units:
+# whoever copied the files. Four runs on small simulated units:
 #   A. two units whose folder and recording names hold $(...), backticks, ';', '|', '>', '&',
 #      spaces, quotes and a leading '-': every recording processed under its own name
 #      (one shard each, the unit's metrics.csv identical to one panel_extract run over the
@@ -11,7 +11,8 @@
 #      refused before anything runs, each named (escaped) in the error, nothing executed,
 #      nothing written;
 #   C. a tool that fails (panel_extract on a broken --config) on a hostile name: the job fails
-#      with the tool's own error and its log named, no shard left behind, no "latency" story.
+#      with the tool's own error and its log named, no shard left behind, no "latency" story;
+#   D. a --config value with a single quote: refused, naming the setting.
 #   bash scripts/test_workflow_names.sh [BUILD_DIR]     (ctest: workflow_hostile_names)
 # Every failing check says which, on one line, and the script exits non-zero.
 set -euo pipefail
@@ -147,8 +148,10 @@ for unit in "$UNIT1" "$UNIT2"; do
 done
 
 # --- B. names Snakemake cannot carry: refused before anything runs, by name -----------------
-make_units "$WORK/units_nl" $'unit_ok=rec\n$(touch PWNED_newline)\x1f{recording}$(touch PWNED_b)\x1fit\'s $(touch PWNED_q)\x1fback\\slash\x1f"quoted"\x1fa,b' \
-    $'unit\nb=ok' || fail "could not make the newline units"
+REFUSED=($'rec\n$(touch PWNED_newline)' '{recording}$(touch PWNED_b)' "it's \$(touch PWNED_q)"
+         'back\slash' '"quoted"' 'a,b')
+make_units "$WORK/units_nl" "unit_ok=$(IFS=$US; echo "${REFUSED[*]}")" $'unit\nb=ok' ||
+  fail "could not make the units of run B"
 if snake B "$WORK/units_nl" "$WORK/results_nl"; then
   fail "run B: names Snakemake cannot carry were accepted, see $WORK/B.log"
 fi
@@ -157,9 +160,9 @@ grep -qF "'rec\\n\$(touch PWNED_newline).bag'" "$WORK/B.log" ||
   fail "run B: the recording with a newline is not named in $WORK/B.log"
 grep -qF "'$WORK/units_nl/unit\\nb'" "$WORK/B.log" ||
   fail "run B: the unit with a newline is not named in $WORK/B.log"
-for refused in '{recording}$(touch PWNED_b).bag: a brace' "it's \$(touch PWNED_q).bag: a single quote" \
-    'back\slash.bag: a single quote or backslash' '"quoted".bag: a double quote at the start' \
-    'a,b.bag: a comma'; do
+for refused in '{recording}$(touch PWNED_b).bag: a brace' \
+    "it's \$(touch PWNED_q).bag: a single quote" 'back\slash.bag: a single quote or backslash' \
+    '"quoted".bag: a double quote at the start' 'a,b.bag: a comma'; do
   grep -qF "$refused" "$WORK/B.log" || fail "run B: no '$refused...' in $WORK/B.log"
 done
 [ ! -e "$WORK/results_nl" ] || fail "run B: outputs written although the run was refused"
@@ -179,6 +182,14 @@ grep -qF 'broken config.yaml' "$WORK/C.log" ||
 ! grep -qi 'latency' "$WORK/C.log" || fail "run C: blamed on file-system latency, see $WORK/C.log"
 shards=$(find "$WORK/results_fail" -path '*/shards/*' 2>/dev/null | wc -l)
 [ "$shards" -eq 0 ] || fail "run C: $shards partial shard(s) left behind"
+
+# --- D. a setting Snakemake cannot pass to its jobs: refused, named --------------------------
+if snake D "$WORK/units" "$WORK/results_d" "fit_args=--lambda '1'"; then
+  fail "run D: a setting with a single quote was accepted, see $WORK/D.log"
+fi
+grep -qF 'workflow: setting fit_args: a control character, single quote or backslash' \
+    "$WORK/D.log" || fail "run D: the setting is not named in $WORK/D.log"
+[ ! -e "$WORK/results_d" ] || fail "run D: outputs written although the run was refused"
 
 echo "test_workflow_names: 16 hostile recording names in 2 hostile units processed under their" \
   "own names, nothing executed, no stray file; 7 names Snakemake cannot carry refused by name;" \
