@@ -107,14 +107,20 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   const std::size_t n_px = pixels.size();
   const int pooled_frames =
       mp.region.pooled_frames > 0 ? std::min(mp.region.pooled_frames, frames) : frames;
-  const bool decide = !(params.departures.region_spill_px > 0) && pooled_frames <= 65535;
+  const bool decide = !(params.departures.region_spill_px > 0);
   std::vector<std::uint16_t> stored(decide ? static_cast<std::size_t>(pooled_frames) * n_px : 0);
   std::vector<std::uint16_t> counts;
   int rendered = 0;
   if (decide) {
-    // 32-bit sums (vectorized): 65535 frames of 16-bit counts fit.
+    // 32-bit sums (vectorized), carried into 64-bit ones every 65535 frames of 16-bit counts.
     std::vector<std::uint32_t> n_valid(n_px, 0), sum(n_px, 0);
+    std::vector<std::uint64_t> carry(n_px, 0);
     for (; rendered < pooled_frames; ++rendered) {
+      if (rendered > 0 && rendered % 65535 == 0)
+        for (std::size_t k = 0; k < n_px; ++k) {
+          carry[k] += sum[k];
+          sum[k] = 0;
+        }
       std::uint16_t* frame = stored.data() + static_cast<std::size_t>(rendered) * n_px;
       sim.RenderPixels(rendered, pixels, &counts);
       std::copy(counts.begin(), counts.end(), frame);
@@ -124,7 +130,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
       }
     }
     std::vector<metrics::PooledPixel> pooled(n_px);
-    for (std::size_t k = 0; k < n_px; ++k) pooled[k] = {n_valid[k], sum[k]};
+    for (std::size_t k = 0; k < n_px; ++k) pooled[k] = {n_valid[k], carry[k] + sum[k]};
     const Eigen::Matrix3d level = LevelFromCamera(params.protocol.scene);
     metrics::Plane ground;
     ground.normal = level.transpose() * Eigen::Vector3d(0, -1, 0);
