@@ -7,6 +7,7 @@ set(DEPTHBIAS_DEPENDENCIES
   "Eigen3 3.3 NO_MODULE"
   "yaml-cpp"
   "Ceres"
+  # OpenCV: the panel's image-space work on the accumulated depth image (lib/panel/hole_fill.cpp)
   "OpenCV COMPONENTS core imgproc"
   "PCL COMPONENTS common sample_consensus segmentation search kdtree filters")
 foreach(dependency IN LISTS DEPTHBIAS_DEPENDENCIES)

@@ -114,23 +114,41 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
     }
   }
   const double fb = in.fx * p.baseline_m;
-  // First plane: every observed pixel; then the pixels on it.
-  out.plane_ok = FitInverseDepthPlane(rays, mean_m, weight, use, &out.plane);
-  std::vector<std::uint8_t> observed = use;
+  // What does not change from one plane to the next: the ground, 1/√n.
+  std::vector<std::uint8_t> on_ground(n, 0);
+  std::vector<double> inv_sqrt_n(n, 0.0);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!use[k]) continue;
+    inv_sqrt_n[k] = 1.0 / std::sqrt(weight[k]);
+    on_ground[k] = ground && ground->Distance(mean_m[k] * rays[k]) < p.ground_distance_m;
+  }
+  // ClassifyMeanDepth, with those precomputed.
+  const double k_sigma = p.sigma_k / (fb);
   auto classify = [&](std::size_t k) {
-    return ClassifyMeanDepth(rays[k], static_cast<std::uint32_t>(weight[k]), mean_m[k], in.fx,
-                             out.subpixel_rms_px, out.plane, ground, p);
+    if (on_ground[k]) return PixelClass::kGround;
+    const double zp = out.plane.DepthOnRay(rays[k]);
+    if (!std::isfinite(zp)) return PixelClass::kBehind;
+    const double limit =
+        k_sigma * zp * zp * out.subpixel_rms_px * inv_sqrt_n[k] + p.plane_distance_m;
+    if (mean_m[k] - zp > limit) return PixelClass::kBehind;
+    if (zp - mean_m[k] > limit) return PixelClass::kInFront;
+    return PixelClass::kOnPlane;
   };
+  // First plane: every observed pixel; then the pixels on it, until they no longer change.
+  out.plane_ok = FitInverseDepthPlane(rays, mean_m, weight, use, &out.plane);
+  const std::vector<std::uint8_t>& observed = use;
+  std::vector<std::uint8_t> on(n, 0), last;
   for (int it = 0; out.plane_ok; ++it) {
     out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px,
                                    ScatterPx(rays, mean_m, weight, observed, out.plane, fb));
     if (it == p.refit_iterations) break;
-    std::vector<std::uint8_t> on(n, 0);
     for (std::size_t k = 0; k < n; ++k)
       on[k] = observed[k] && classify(k) == PixelClass::kOnPlane;
+    if (on == last) break;  // the refit would give the same plane and σ
     Plane refit;
     if (!FitInverseDepthPlane(rays, mean_m, weight, on, &refit)) break;
     out.plane = refit;
+    last = on;
   }
   out.pixels.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {

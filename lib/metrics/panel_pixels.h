@@ -8,12 +8,12 @@
 // behind it (the background seen past the panel's edge), in front of it (an occluder), on the
 // ground, or a hole (no sample). The panel's plane is fitted to the region's own pooled pixels in
 // inverse depth (1/Z = k·(x/z, y/z, 1), each pixel weighted by its samples), then refitted on the
-// pixels found on it, refit_iterations times. A pixel departs from the plane when its mean depth
-// differs from the plane's depth on its ray by more than sigma_k·σ_Z(Z)/√n + plane_distance_m,
-// σ_Z = Z²·σ_d/(f·B); σ_d is the larger of expected_subpixel_rms_px and the region's own scatter
-// (1.4826 × the median absolute disparity residual × √n of the pixels), so that the noise of a
-// far, noisy recording is not mistaken for the background. The panel's pixels are the region's
-// pixels that are holes or on the plane.
+// pixels found on it until they no longer change (at most refit_iterations times). A pixel
+// departs from the plane when its mean depth differs from the plane's depth on its ray by more
+// than sigma_k·σ_Z(Z)/√n + plane_distance_m, σ_Z = Z²·σ_d/(f·B); σ_d is the larger of
+// expected_subpixel_rms_px and the region's own scatter (1.4826 × the median absolute disparity
+// residual × √n of the pixels), so that the noise of a far, noisy recording is not mistaken for
+// the background. The panel's pixels are the region's pixels that are holes or on the plane.
 
 #include <cstdint>
 #include <string>
@@ -34,7 +34,7 @@ struct PanelPixelParams {
   double sigma_k = 4.0;                          // departure threshold in σ of a pixel's mean
   double plane_distance_m = 0.02;                // added to the threshold [m]
   double ground_distance_m = 0.08;               // a sample this near the ground is the ground
-  int refit_iterations = 3;                      // plane refitted on its own pixels
+  int refit_iterations = 3;                      // plane refitted on its own pixels, at most
   // Frames pooled for the decision: the first pooled_frames frames of the recording (0: all).
   int pooled_frames = 30;
 

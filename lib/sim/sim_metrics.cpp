@@ -112,15 +112,25 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   std::vector<std::uint16_t> counts;
   int rendered = 0;
   if (decide) {
-    std::vector<metrics::PooledPixel> pooled(n_px);
+    // 32-bit sums (vectorized), carried into 64-bit ones every 65535 frames of 16-bit counts.
+    std::vector<std::uint32_t> n_valid(n_px, 0), sum(n_px, 0);
+    std::vector<std::uint64_t> carry(n_px, 0);
     for (; rendered < pooled_frames; ++rendered) {
+      if (rendered > 0 && rendered % 65535 == 0)
+        for (std::size_t k = 0; k < n_px; ++k) {
+          carry[k] += sum[k];
+          sum[k] = 0;
+        }
+      std::uint16_t* frame = stored.data() + static_cast<std::size_t>(rendered) * n_px;
       sim.RenderPixels(rendered, pixels, &counts);
-      std::copy(counts.begin(), counts.end(), stored.begin() + rendered * n_px);
+      std::copy(counts.begin(), counts.end(), frame);
       for (std::size_t k = 0; k < n_px; ++k) {
-        pooled[k].count += counts[k] != 0;
-        pooled[k].sum_counts += counts[k];
+        n_valid[k] += frame[k] != 0;
+        sum[k] += frame[k];
       }
     }
+    std::vector<metrics::PooledPixel> pooled(n_px);
+    for (std::size_t k = 0; k < n_px; ++k) pooled[k] = {n_valid[k], carry[k] + sum[k]};
     const Eigen::Matrix3d level = LevelFromCamera(params.protocol.scene);
     metrics::Plane ground;
     ground.normal = level.transpose() * Eigen::Vector3d(0, -1, 0);

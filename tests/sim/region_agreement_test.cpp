@@ -2,16 +2,17 @@
 // 6 frames both ways, bags through panel_extract against the metrics-only path, compared column by
 // column on all 128 cells. The two paths decide the panel's pixels from the pooled frames by the
 // same function (metrics/panel_pixels.h) and measure them by the same kernel; what remains is the
-// detected rectangle against the true one, placed to within a pixel: a row or a column of the
-// region may flip on each side. Each column is held to that quantization:
+// detected rectangle against the true one, placed to within a pixel: the region may gain or lose
+// a row and a column. Each column is held to that quantization:
 //  - frames: equal;
 //  - median, range, mean: one disparity step (1/32 px) in depth at Z, Z²/(32·f·B), + 1 mm;
-//  - region_px: a one-pixel band around the region, 4·side pixels (side = √region_px);
-//  - hole rate and valid %: that many pixels' worth of the region, 100·4·side/px;
+//  - region_px: one row and one column of the region, each a pixel longer, 2·side + 2 pixels
+//    (side = √region_px);
+//  - hole rate and valid %: that many pixels' worth of the region, 100·(2·side + 2)/px;
 //  - width, height: a column or row on each side, two pixel footprints 2·Z/f;
 //  - azimuth, elevation: one pixel's angle 1/f rad, + 0.01° for the plane's noise;
 //  - plane_std, subpixel_rms, temporal_std: statistics of the samples, held relatively to three
-//    times the share of the region that band makes, 3·4·side/px, + 1 %;
+//    times the share of the region that row and column make, 3·(2·side + 2)/px, + 1 %;
 //  - normal tilt: 1.5 standard errors of the inverse-depth plane's slope, + 0.1°.
 // The table printed gives, per column, the cells beyond their tolerance and the largest
 // difference in units of it. The manifest's truth (true_hole_rate_pct) is the metrics-only hole
@@ -55,8 +56,9 @@ struct Column {
 double StepM(const records::PanelMetrics& s) {
   return s.median_m * s.median_m / (kFocalPx * kBaselineM) / 32.0;
 }
-// Pixels of a one-pixel band around the region (its sides from its pixel count).
-double EdgePx(const records::PanelMetrics& s) { return 4.0 * std::sqrt(s.region_px); }
+// Pixels of one row and one column of the region, each a pixel longer (its sides from its pixel
+// count).
+double EdgePx(const records::PanelMetrics& s) { return 2.0 * std::sqrt(s.region_px) + 2.0; }
 
 std::vector<Column> Columns() {
   using M = records::PanelMetrics;
