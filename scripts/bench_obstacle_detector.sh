@@ -4,7 +4,11 @@
 # the same bag and the same core:
 #   - librealsense's own playback alone (pyrealsense2 from .venv, non-real-time, every depth
 #     frame's pixels touched): what any detector built on librealsense pays before computing;
-#   - depthbias's BagReader alone (bag_info --read-all): this detector's share spent reading.
+#   - depthbias's BagReader alone (bag_info --read-all): this detector's share spent reading;
+# and the detector with PCL's own classes in place of the hand-written stages, on the same bag:
+# pcl::VoxelGrid (voxel.use_pcl), pcl::ConditionalEuclideanClustering with the range-dependent
+# tolerance as its condition (cluster.use_pcl), and both; their detections compared with the
+# default run's (identical, or how many obstacles differ and by how much).
 # The recording: simulate's obstacle scene (config/protocol_obstacles.yaml: seven people, two
 # bushes, a hedge; High Density, emitter on), FRAMES frames. Target: >= 30 frames/s.
 # Usage: bash scripts/bench_obstacle_detector.sh   (BUILD_DIR=build FRAMES=150 REPEAT=3 CORE=0)
@@ -69,6 +73,45 @@ det_s=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" \
           --config config/obstacle_detector.yaml --out "$OUT/d.jsonl" "$BAG")
 lines=$(wc -l < "$OUT/d.jsonl")
 obst=$({ grep -o '"points"' "$OUT/d.jsonl" || true; } | wc -l)
+# The same detector with PCL's classes in place of the hand-written stages.
+pcl_in() {  # pcl_in SECTION...: the committed config with use_pcl true in those sections
+  local script=""
+  for section in "$@"; do script+="/^$section:/,/^[a-z]/ s/use_pcl: false/use_pcl: true/;"; done
+  sed "$script" config/obstacle_detector.yaml
+}
+pcl_in voxel > "$OUT/vox.yaml"
+pcl_in cluster > "$OUT/clu.yaml"
+pcl_in voxel cluster > "$OUT/both.yaml"
+for v in vox clu both; do
+  [ "$(grep -c 'use_pcl: true' "$OUT/$v.yaml")" -ge 1 ] ||
+    { echo "bench_obstacle_detector: $v.yaml sets no use_pcl" >&2; exit 1; }
+done
+declare -A var_s
+for v in vox clu both; do
+  var_s[$v]=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" --config "$OUT/$v.yaml" \
+                --out "$OUT/d_$v.jsonl" "$BAG")
+done
+# Detections of a variant against the default run's.
+cat > "$OUT/compare.py" <<'PY'
+import json, sys
+a = [json.loads(l) for l in open(sys.argv[1])]
+b = [json.loads(l) for l in open(sys.argv[2])]
+if open(sys.argv[1]).read() == open(sys.argv[2]).read():
+    print("identical"); sys.exit()
+total = sum(len(f["obstacles"]) for f in a)
+counts = sum(len(x["obstacles"]) != len(y["obstacles"]) for x, y in zip(a, b))
+points = zones = 0
+dr = 0.0
+for x, y in zip(a, b):
+    if len(x["obstacles"]) != len(y["obstacles"]):
+        continue
+    for p, q in zip(x["obstacles"], y["obstacles"]):
+        points += p["points"] != q["points"]
+        zones += p["zone"] != q["zone"]
+        dr = max(dr, abs(p["safe_range_m"] - q["safe_range_m"]))
+print(f"{counts} frames with another obstacle count; {points} of {total} obstacles with other "
+      f"points, safe range within {dr * 1000:.1f} mm, {zones} zones changed")
+PY
 read_s=$(run "$BIN/bag_info" --read-all "$BAG")
 play_s=$(run "$PY" "$OUT/playback.py" "$BAG" "$FRAMES")
 played=$(cat "$OUT/stdout.txt")
@@ -80,6 +123,12 @@ echo "recording: $FRAMES frames 1280x720, $(du -m "$BAG" | cut -f1) MB; detector
 printf '%-58s %8s %12s %12s\n' "case (whole process)" "wall_s" "measured" "target"
 printf '%-58s %8.2f %8.1f f/s %12s\n' "obstacle_detector (read, detect, correct, JSONL)" \
   "$det_s" "$(echo "$lines / $det_s" | bc -l)" ">= 30 f/s"
+declare -A label=([vox]="... with pcl::VoxelGrid" [clu]="... with pcl::ConditionalEuclideanClustering"
+                  [both]="... with both")
+for v in vox clu both; do
+  printf '%-58s %8.2f %8.1f f/s   %s\n' "${label[$v]}" "${var_s[$v]}" \
+    "$(echo "$lines / ${var_s[$v]}" | bc -l)" "$("$PY" "$OUT/compare.py" "$OUT/d.jsonl" "$OUT/d_$v.jsonl")"
+done
 printf '%-58s %8.2f %8.1f f/s\n' "peer: librealsense playback alone (pyrealsense2)" \
   "$play_s" "$(echo "$played / $play_s" | bc -l)"
 printf '%-58s %8.2f %8.1f f/s\n' "peer: depthbias BagReader alone (bag_info --read-all)" \

@@ -112,6 +112,7 @@ bool ParseDetectorYaml(const std::string& text, DetectorParams* params, std::str
     if (const YAML::Node n = top.Get("voxel")) {
       MapReader r(n, "voxel");
       r.Double("leaf_m", &p.voxel.leaf_m);
+      r.Bool("use_pcl", &p.voxel.use_pcl);
       r.CheckKnown();
     }
     if (const YAML::Node n = top.Get("ground")) {
@@ -132,6 +133,7 @@ bool ParseDetectorYaml(const std::string& text, DetectorParams* params, std::str
       r.Double("noise_k", &p.cluster.noise_k);
       r.Double("disparity_noise_px", &p.cluster.disparity_noise_px);
       r.Int("min_points", &p.cluster.min_points);
+      r.Bool("use_pcl", &p.cluster.use_pcl);
       r.CheckKnown();
     }
     if (const YAML::Node n = top.Get("obstacle")) {

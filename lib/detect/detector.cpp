@@ -97,7 +97,11 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
                        m.previous_depth.size() == m.cloud.depth_m.size();
 
   // 2. Voxel grid.
-  m.grid.Build(m.cloud.points, static_cast<float>(p.voxel.leaf_m), &m.voxel_of, &m.voxels);
+  if (p.voxel.use_pcl) {
+    PclVoxelGrid(m.cloud.points, static_cast<float>(p.voxel.leaf_m), &m.voxel_of, &m.voxels);
+  } else {
+    m.grid.Build(m.cloud.points, static_cast<float>(p.voxel.leaf_m), &m.voxel_of, &m.voxels);
+  }
   out.voxels = static_cast<int>(m.voxels.size());
 
   // 3. Ground.
@@ -108,9 +112,10 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
   out.ransac_iterations = ground.iterations;
 
   // 4. Clusters of the rest; the tolerance grows with range as σ_Z does.
+  const double noise_per_m2 = p.cluster.noise_k * p.cluster.disparity_noise_px / fb;  // k·σ_d/(f·B)
   const std::vector<std::vector<int>> clusters =
-      FindClusters(m.voxels, ground.is_ground, p.cluster,
-                   p.cluster.noise_k * p.cluster.disparity_noise_px / fb);  // k·σ_d/(f·B)
+      p.cluster.use_pcl ? PclClusters(m.voxels, ground.is_ground, p.cluster, noise_per_m2)
+                        : FindClusters(m.voxels, ground.is_ground, p.cluster, noise_per_m2);
   out.clusters = static_cast<int>(clusters.size());
 
   // 5.–7. Obstacles: clusters above the size, measured on their own points, corrected, zoned.

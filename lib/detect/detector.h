@@ -1,13 +1,13 @@
 #pragma once
 // The obstacle detector: one depth frame → the obstacles in it, each with its raw range, its
 // range corrected by the bias model (model::ScenarioModel, the same code correct_depth uses),
-// the predictive σ there, a safe range (corrected − k·σ) and a zone from the machine's stopping
-// distance.
+// the predictive σ there, a safe range (min(raw, corrected − k·σ)) and a zone from the
+// machine's stopping distance; a frame that shows too little is blind and clears nothing.
 //
-// Per frame: deproject one pixel per stride block (rays computed once); voxel grid; ground
-// removed by RANSAC with a normal constraint (PCL); Euclidean clusters whose tolerance grows
-// with range as the stereo noise does (PCL k-d tree); clusters above a size are obstacles,
-// measured on their own points (not the voxels).
+// Per frame, the stages of stages.h: deproject one pixel per stride block (rays computed once);
+// voxel grid; ground removed by RANSAC with a normal constraint (PCL); Euclidean clusters whose
+// tolerance grows with range as the stereo noise does (PCL k-d tree); clusters above a size are
+// obstacles, measured on their own points (not the voxels), corrected and zoned.
 
 #include <cstdint>
 #include <memory>

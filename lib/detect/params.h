@@ -26,6 +26,9 @@ struct CloudParams {
 // Points → one centroid per occupied cube.
 struct VoxelParams {
   double leaf_m = 0.10;  // cube edge [m]
+  // pcl::VoxelGrid (with its leaf layout, for each point's voxel) instead of the hash grid of
+  // stages.h; the same voxels (README "PCL beside ours").
+  bool use_pcl = false;
   bool IsValid(std::string* why) const;
 };
 
@@ -53,6 +56,9 @@ struct ClusterParams {
   // margin's σ_d when the recording's frames do not give one (noise.h).
   double disparity_noise_px = 0.08;
   int min_points = 6;               // voxels; smaller clusters are noise
+  // pcl::ConditionalEuclideanClustering with tol(r) as its condition (its search radius the
+  // largest tol of the cloud) instead of the region growing of stages.h; the same clusters.
+  bool use_pcl = false;
   bool IsValid(std::string* why) const;
 };
 

@@ -60,6 +60,11 @@ class VoxelGrid {
   std::vector<int> counts_;
 };
 
+// The same by pcl::VoxelGrid (its leaf layout kept to find each point's voxel); centroids in
+// PCL's order (by cube index), not first-seen.
+void PclVoxelGrid(const std::vector<Eigen::Vector3f>& points, float leaf_m,
+                  std::vector<int>* voxel_of, std::vector<Eigen::Vector3f>* centroids);
+
 // 3. Ground.
 struct Ground {
   bool found = false;
@@ -77,6 +82,12 @@ Ground FindGround(const std::vector<Eigen::Vector3f>& voxels, const GroundParams
 std::vector<std::vector<int>> FindClusters(const std::vector<Eigen::Vector3f>& voxels,
                                            const std::vector<char>& is_ground,
                                            const ClusterParams& params, double noise_per_m2);
+
+// The same by pcl::ConditionalEuclideanClustering: its radius the largest tol(r) of the cloud,
+// its condition the tolerance at the point grown from.
+std::vector<std::vector<int>> PclClusters(const std::vector<Eigen::Vector3f>& voxels,
+                                          const std::vector<char>& is_ground,
+                                          const ClusterParams& params, double noise_per_m2);
 
 // 5. Obstacle: measured on its own points (indices into `points`); false when it stands lower
 // than min_height_m above the ground (the image's vertical when there is none).

@@ -37,6 +37,8 @@ TEST(DetectorYaml, CommittedConfigListsTheDefaults) {
   EXPECT_EQ(p.k, d.k);
   EXPECT_EQ(p.cloud.min_valid_pct, d.cloud.min_valid_pct);
   EXPECT_EQ(p.safe_beyond_raw, d.safe_beyond_raw);
+  EXPECT_EQ(p.voxel.use_pcl, d.voxel.use_pcl);
+  EXPECT_EQ(p.cluster.use_pcl, d.cluster.use_pcl);
 }
 
 TEST(DetectorYaml, OverridesOnlyWhatItNames) {
