@@ -46,7 +46,11 @@ int main(int argc, char** argv) {
       read_all = true;
     } else if (a == "--partial") {
       partial = true;
-    } else if (a == "--topic" && i + 1 < argc) {
+    } else if (a == "--topic") {
+      if (i + 1 == argc) {
+        std::cerr << "bag_info: --topic needs a topic name (see bag_info --help)\n";
+        return depthbias::apps::kExitError;
+      }
       topic = argv[++i];
     } else if (a == "-h" || a == "--help") {
       Usage(std::cout);

@@ -68,7 +68,7 @@ for t in "${TARGETS[@]}"; do
   log=$BUILD/fuzz_$t.log
   if [ "$SMOKE" = 1 ]; then
     runs_each=$SMOKE_RUNS
-    [ "$t" = bag_reader ] && runs_each=$((SMOKE_RUNS / 10))
+    case "$t" in bag_reader | mcap) runs_each=$((SMOKE_RUNS / 10)) ;; esac
     how=(-seed=$SMOKE_SEED -runs=$runs_each -reload=0)
     # Addresses reach the mutations through the compared values libFuzzer records: without
     # address randomization the same seed gives the same inputs.

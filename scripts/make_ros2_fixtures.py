@@ -17,7 +17,8 @@ Also manifest.csv (every recording with preset HA, emitter on), and damaged copi
 cut.mcap (mcap_zstd.mcap cut in its middle: no summary, no footer), flipped.mcap (a byte of a
 chunk's compressed data changed), huge_record.mcap (a record length of 2^62), huge_chunk.mcap
 (a chunk claiming 2^40 bytes uncompressed), huge_image.mcap (an image claiming 65535 x 65535 px
-in 40 bytes), notmcap.mcap (text), cut.db3 (the SQLite file cut to half), garbage.db3.
+in 40 bytes), other_size.mcap (camera_info 32 x 24 px, images 16 x 12 px), notmcap.mcap
+(text), cut.db3 (the SQLite file cut to half), garbage.db3.
 
 Usage: make_ros2_fixtures.py OUT_DIR [--frames N]
        make_ros2_fixtures.py --check-mcap FILE.mcap FRAMES   (reads a file depthbias wrote with
@@ -163,6 +164,28 @@ def damaged(out, good_mcap, good_db3):
     open(os.path.join(bad, "cut.db3"), "wb").write(db[:len(db) // 2])
     open(os.path.join(bad, "garbage.db3"), "wb").write(b"SQLite format 3\0" + bytes(range(256)) * 8)
     huge_image(os.path.join(bad, "huge_image.mcap"))
+    other_size(os.path.join(bad, "other_size.mcap"))
+
+
+def other_size(path):
+    """camera_info of 32 x 24 px beside depth images of 16 x 12 px."""
+    from mcap.writer import CompressionType
+    from mcap_ros2.writer import Writer
+    with open(path, "wb") as f:
+        w = Writer(f, compression=CompressionType.NONE)
+        image = w.register_msgdef("sensor_msgs/msg/Image", IMAGE_DEF)
+        info = w.register_msgdef("sensor_msgs/msg/CameraInfo", INFO_DEF)
+        header = {"stamp": {"sec": 1, "nanosec": 0}, "frame_id": "d"}
+        w.write_message(INFO, info, dict(
+            header=header, height=24, width=32, distortion_model="plumb_bob", d=[0.0] * 5,
+            k=[20.0, 0, 16, 0, 20.0, 12, 0, 0, 1], r=[1, 0, 0, 0, 1, 0, 0, 0, 1],
+            p=[20.0, 0, 16, 0, 0, 20.0, 12, 0, 0, 0, 1, 0], binning_x=0, binning_y=0,
+            roi={"x_offset": 0, "y_offset": 0, "height": 0, "width": 0, "do_rectify": False}),
+            log_time=1)
+        w.write_message(DEPTH, image, {"header": header, "height": 12, "width": 16,
+                                       "encoding": "16UC1", "is_bigendian": 0, "step": 32,
+                                       "data": bytes(384)}, log_time=1)
+        w.finish()
 
 
 def huge_image(path):
@@ -238,7 +261,7 @@ def main():
         for name in ["ros1.bag", "rosbags_mcap", "rosbags_sqlite", "mcap_zstd.mcap",
                      "mcap_lz4.mcap"]:
             f.write("%s,8,20,daylight,HA,on\n" % name)
-    print("make_ros2_fixtures: %d frames in 5 recordings and 8 damaged copies in %s" %
+    print("make_ros2_fixtures: %d frames in 5 recordings and 9 damaged files in %s" %
           (len(frames), out))
     return 0
 

@@ -54,6 +54,12 @@ class Rosbag2Source : public RecordingSource {
                                                                  : BagError::Kind::kCorrupt,
                        path_, r2_.depth_topic + " message " + std::to_string(frames_ + 1) +
                                   ": " + why);
+      if (frame->width != info_.depth.width || frame->height != info_.depth.height)
+        throw BagError(BagError::Kind::kCorrupt, path_,
+                       r2_.depth_topic + " message " + std::to_string(frames_ + 1) + ": " +
+                           std::to_string(frame->width) + "x" + std::to_string(frame->height) +
+                           " px in a stream of " + std::to_string(info_.depth.width) + "x" +
+                           std::to_string(info_.depth.height) + " px");
       frame->frame_number = ++frames_;
       return true;
     }
@@ -266,6 +272,13 @@ void Rosbag2Source::Open() {
   if (info_.depth_frames == 0) Fail(BagError::Kind::kNoDepthStream,
                                     r2_.depth_topic + " holds no message");
   ReadSettings();
+  const camera::Intrinsics& in = info_.depth_intrinsics;
+  if (info_.has_depth_intrinsics &&
+      (in.width != info_.depth.width || in.height != info_.depth.height))
+    Fail(BagError::Kind::kCorrupt, r2_.camera_info_topic + " is " + std::to_string(in.width) +
+                                       "x" + std::to_string(in.height) + " px, the depth images " +
+                                       std::to_string(info_.depth.width) + "x" +
+                                       std::to_string(info_.depth.height) + " px");
   info_.first_timestamp_ms = r2_.start_ns / 1e6;
   info_.last_timestamp_ms = r2_.end_ns / 1e6;
   info_.device["Name"] = "RealSense (ROS 2 wrapper)";

@@ -115,7 +115,8 @@ TEST(Rosbag2, CutShortMcapGivesItsFramesUpToTheCut) {
 
 TEST(Rosbag2, DamagedAndHostileFilesAreRefusedInOneLineNamingTheFile) {
   for (const std::string name : {"flipped.mcap", "huge_record.mcap", "huge_chunk.mcap",
-                                 "huge_image.mcap", "notmcap.mcap", "cut.db3", "garbage.db3"}) {
+                                 "huge_image.mcap", "other_size.mcap", "notmcap.mcap", "cut.db3",
+                                 "garbage.db3"}) {
     SCOPED_TRACE(name);
     const std::string path = kDir + "/bad/" + name;
     try {
