@@ -112,15 +112,19 @@ TEST(Design, RefusesBadRowsWithTheRowNamed) {
   EXPECT_NE(why.find("no rows"), std::string::npos) << why;
 }
 
-TEST(Noise, ReplicatesGiveTheNoiseOfOneResidual) {
+TEST(Noise, ReplicatesGiveTheNoiseOfOneResidualAndTheEmitterMismatchApart) {
   Design d;
   std::string why;
   auto rows = Table();
-  // Residual noise of 0.02 m at 10 m on the median, shaped as (Z / 10 m)²: alternate signs over
-  // the pairs give |Δ| = 2·0.02·shape, so the robust scale is 1.4826·0.04/√2 ≈ 0.042.
+  // The camera's emitter adds 0.05 m at 10 m to the median (the simulator's nothing), and the
+  // twins differ by ±0.04 m at 10 m about that (signs alternating with the angle), both shaped
+  // as (Z / 10 m)². Each scenario and distance holds two twins: their mean (the mismatch) is
+  // removed, the deviations ±0.04 inflated by √(2/1), so the robust scale is
+  // 1.4826·0.04·√2/√2 = 1.4826·0.04.
   for (auto& r : rows) {
     const double shape = std::pow(r.distance_m / 10.0, 2);
-    r.median_m = r.distance_m + (r.emitter == "on" ? 0.02 : -0.02) * shape;
+    const double twin = (r.angle_deg == 0 ? 0.02 : -0.02) * (r.emitter == "on" ? 1 : -1);
+    r.median_m = r.distance_m + (twin + (r.emitter == "on" ? 0.05 : 0.0)) * shape;
   }
   ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
   Simulations s;
@@ -134,9 +138,18 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidual) {
     }
   }
   const NoiseEstimate n = EstimateNoise(d, s);
-  EXPECT_NEAR(n.scale[0], 1.4826 * 0.04 / std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR(n.scale[0], 1.4826 * 0.04, 1e-9);
   EXPECT_EQ(n.method[0], "replicates");
   EXPECT_EQ(n.pairs[0], 24);
+  int groups = 0;
+  for (const EmitterGap& e : n.emitter) {
+    if (e.k != 0) continue;
+    ++groups;
+    EXPECT_EQ(e.pairs, 2);
+    EXPECT_NEAR(e.mean, 0.05 * std::pow(e.distance_m / 10.0, 2), 1e-9);
+    EXPECT_GT(e.z, 0);
+  }
+  EXPECT_EQ(groups, 12);  // 4 scenarios × 3 distances
   EXPECT_EQ(n.method[2], "replicates + floor");  // identical rows: the floor
   // The quantization of the median adds in quadrature: one subpixel step at 12 m.
   const double q = 144.0 * s.sensor.subpixel_step_px / (s.sensor.focal_px() * s.sensor.baseline_m);
