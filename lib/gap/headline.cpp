@@ -107,7 +107,7 @@ std::string Headline(const DiagnoseResult& r) {
   // 5. How far.
   const Nested& n = r.nested;
   if (n.run) {
-    o << "how far, held out (outer folds: every fit made without the cells it is judged on): gap "
+    o << "how far: held out in outer folds (every fit made without the cells it is judged on), gap "
       << Num(n.baseline.overall) << " -> " << Num(n.simulated.overall)
       << " with the selection simulated (" << Pct(n.shrink_simulated_pct) << " shrink), "
       << Num(n.selected.overall) << " added (" << Pct(n.shrink_heldout_nested_pct) << ")\n";
