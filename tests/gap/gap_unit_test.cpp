@@ -164,8 +164,8 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidualAndTheEmitterMismatchApart) {
 
 // Placement: every test point of a 2 lights × 4 distances × 4 angles table shifted by a draw of
 // τ(D) = 0.05 m + 2 % of D, its four recordings (presets, emitter) sharing it, over replicate
-// noise of 5 mm; one test point set 3 m farther (eight times the law there). REML finds the law within a factor of two at
-// 16 m and flags that test point, reading far.
+// noise of 5 mm; one test point set 3 m farther (eight times the law there). REML finds the law
+// within a factor of two at 16 m and flags that test point, reading far.
 TEST(Placement, RemlFindsTheScatterLawAndFlagsTheMisplacedPoint) {
   std::vector<records::PanelMetrics> rows;
   for (const char* light : {"daylight", "sunset"})
