@@ -112,7 +112,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   try {
     r.noise = EstimateNoise(design, sims);
     if (params.placement)
-      r.placement = EstimatePlacement(design, sims, r.noise, std::vector<char>(design.num_cells(), 1),
+      r.placement = EstimatePlacement(design, sims, r.noise,
+                                      std::vector<char>(design.num_cells(), 1),
                                       params.placement_alpha);
   } catch (const std::exception& e) {
     r.message = e.what();
@@ -174,7 +175,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         int count = 0;
         for (const auto& f : r.nested.folds)
           count += std::count(f.selected.begin(), f.selected.end(), r.steps[i].effect) ? 1 : 0;
-        const bool earns = r.nested.gain > 0 && 2 * count >= static_cast<int>(r.nested.folds.size());
+        const bool earns =
+            r.nested.gain > 0 && 2 * count >= static_cast<int>(r.nested.folds.size());
         if (earns) {
           kept.push_back(current.terms[i].term);
           start.terms.push_back(current.terms[i]);

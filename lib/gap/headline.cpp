@@ -42,7 +42,8 @@ std::string Headline(const DiagnoseResult& r) {
     o << "range: where " << u.where << ", the camera " << Direction(u.size) << " by "
       << Num(std::fabs(u.size)) << " m (95 % ± " << Num(1.96 * u.size_se, 2) << " m, "
       << u.cells.size() << " recordings; form " << u.form;
-    if (u.form == "∝ D" || u.form == "∝ D²") o << ", " << Signed(u.size_at_max) << " m at the far end";
+    if (u.form == "∝ D" || u.form == "∝ D²")
+      o << ", " << Signed(u.size_at_max) << " m at the far end";
     o << "); no registered effect explains it\n";
   }
   if (!range && km >= 0)
@@ -77,7 +78,8 @@ std::string Headline(const DiagnoseResult& r) {
   }
   if (worst)
     o << "emitter: the camera's emitter on − off differs from the simulator's in " << significant
-      << " scenario × distance × metric groups; most at " << r.design.scenario_names[worst->scenario]
+      << " scenario × distance × metric groups; most at "
+      << r.design.scenario_names[worst->scenario]
       << " " << Num(worst->distance_m) << " m: " << r.metric_names[worst->k] << " "
       << Signed(worst->mean) << " (z " << Num(worst->z, 2) << ")\n";
   // 4. Which effect.
@@ -107,7 +109,7 @@ std::string Headline(const DiagnoseResult& r) {
   // 5. How far.
   const Nested& n = r.nested;
   if (n.run) {
-    o << "how far, held out (outer folds: every fit made without the cells it is judged on): gap "
+    o << "how far: held out in outer folds (every fit made without the cells it is judged on), gap "
       << Num(n.baseline.overall) << " -> " << Num(n.simulated.overall)
       << " with the selection simulated (" << Pct(n.shrink_simulated_pct) << " shrink), "
       << Num(n.selected.overall) << " added (" << Pct(n.shrink_heldout_nested_pct) << ")\n";

@@ -1,9 +1,12 @@
 #include "gap/nested.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <sstream>
+#include <stdexcept>
+#include <thread>
 
 #include "gap/localize.h"
 #include "gap/select.h"
@@ -46,6 +49,77 @@ Design Subset(const Design& d, const std::vector<char>& cells) {
   return s;
 }
 
+namespace {
+
+// One outer fold diagnosed without its cells.
+struct FoldRun {
+  NestedFold fold;
+  std::vector<char> held;
+  std::vector<double> zb, z0, z1, zs;
+  bool ok = true;
+  std::string message;
+};
+
+FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& base,
+                const DiagnoseParams& params, const std::vector<int>& fold, int num_folds,
+                int f) {
+  FoldRun out;
+  const int kk = d.num_metrics();
+  const size_t obs = d.real.size();
+  std::vector<char> train(d.num_cells(), 0);
+  out.held.assign(d.num_cells(), 0);
+  NestedFold& nf = out.fold;
+  for (int c = 0; c < d.num_cells(); ++c) {
+    train[c] = fold[c] != f;
+    out.held[c] = fold[c] == f;
+    if (out.held[c] && nf.held.empty()) nf.held = LevelOf(d.cells[c], 0);
+    nf.cells += out.held[c];
+  }
+  if (nf.cells == 0) return out;
+  try {
+    const NoiseEstimate noise = EstimateNoise(d, sims, train);
+    const PlacementEstimate placement =
+        params.placement ? EstimatePlacement(d, sims, noise, train, params.placement_alpha)
+                         : PlacementEstimate();
+    GapModel model(d, sims, noise, params.fit, &placement);
+    const Selection sel = Select(model, train, fold, num_folds, params);
+    if (!sel.success) throw std::invalid_argument(sel.message);
+    for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
+    const std::vector<double> mu0 = model.Predict(sel.m0), mu1 = model.Predict(sel.current);
+    nf.deviance_calibrated = model.DataDeviance(mu0, out.held);
+    nf.deviance_selected = model.DataDeviance(mu1, out.held);
+    out.zb = Scaled(model, sims.base);
+    out.z0 = Scaled(model, mu0);
+    out.z1 = Scaled(model, mu1);
+    out.zs.assign(obs, NAN);
+    try {
+      const Design sub = Subset(d, out.held);
+      SimulateOptions options = params.simulate;
+      options.threads = 1;  // the folds run side by side
+      const std::vector<double> v = SimulateValues(
+          SelectedParams(sims, base, sel.current, d.num_scenarios()), sub, options);
+      std::vector<double> mu(obs, NAN);
+      int i = 0;
+      for (int c = 0; c < d.num_cells(); ++c) {
+        if (!out.held[c]) continue;
+        for (int k = 0; k < kk; ++k)
+          mu[static_cast<size_t>(c) * kk + k] = v[static_cast<size_t>(i) * kk + k];
+        ++i;
+      }
+      out.zs = Scaled(model, mu);
+      nf.simulated = true;
+    } catch (const std::exception& e) {
+      out.message = "fold " + nf.held + ": not simulated: " + e.what();
+    }
+  } catch (const std::exception& e) {
+    out.ok = false;
+    out.message = "fold " + nf.held + ": " + e.what();
+  }
+  return out;
+}
+
+}  // namespace
+
 Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams& base,
                  const DiagnoseParams& params, const std::vector<int>& fold, int num_folds,
                  const GapModel& full) {
@@ -55,67 +129,42 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   n.cells.assign(d.num_cells(), 0);
   for (auto* z : {&n.z_baseline, &n.z_calibrated, &n.z_selected, &n.z_simulated})
     z->assign(obs, NAN);
+  // The folds side by side, as many at once as the simulation may use threads.
+  std::vector<FoldRun> runs(num_folds);
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int f = next++; f < num_folds; f = next++)
+      runs[f] = RunFold(d, sims, base, params, fold, num_folds, f);
+  };
+  const int workers = std::max(1, std::min(params.simulate.threads, num_folds));
+  std::vector<std::thread> pool;
+  for (int i = 1; i < workers; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
   bool all_simulated = true;
-  for (int f = 0; f < num_folds; ++f) {
-    std::vector<char> train(d.num_cells(), 0), held(d.num_cells(), 0);
-    NestedFold nf;
-    for (int c = 0; c < d.num_cells(); ++c) {
-      train[c] = fold[c] != f;
-      held[c] = fold[c] == f;
-      if (held[c] && nf.held.empty()) nf.held = LevelOf(d.cells[c], 0);
-      nf.cells += held[c];
-    }
-    if (nf.cells == 0) continue;
-    try {
-      const NoiseEstimate noise = EstimateNoise(d, sims, train);
-      const PlacementEstimate placement =
-          params.placement ? EstimatePlacement(d, sims, noise, train, params.placement_alpha)
-                           : PlacementEstimate();
-      GapModel model(d, sims, noise, params.fit, &placement);
-      const Selection sel = Select(model, train, fold, num_folds, params);
-      if (!sel.success) throw std::invalid_argument(sel.message);
-      for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
-      const std::vector<double> mu0 = model.Predict(sel.m0), mu1 = model.Predict(sel.current);
-      nf.deviance_calibrated = model.DataDeviance(mu0, held);
-      nf.deviance_selected = model.DataDeviance(mu1, held);
-      n.gain += nf.deviance_calibrated - nf.deviance_selected;
-      const std::vector<double> zb = Scaled(model, sims.base), z0 = Scaled(model, mu0),
-                                z1 = Scaled(model, mu1);
-      std::vector<double> zs(obs, NAN);
-      try {
-        const Design sub = Subset(d, held);
-        const std::vector<double> v = SimulateValues(
-            SelectedParams(sims, base, sel.current, d.num_scenarios()), sub, params.simulate);
-        std::vector<double> mu(obs, NAN);
-        int i = 0;
-        for (int c = 0; c < d.num_cells(); ++c) {
-          if (!held[c]) continue;
-          for (int k = 0; k < kk; ++k)
-            mu[static_cast<size_t>(c) * kk + k] = v[static_cast<size_t>(i) * kk + k];
-          ++i;
-        }
-        zs = Scaled(model, mu);
-        nf.simulated = true;
-      } catch (const std::exception& e) {
-        all_simulated = false;
-        n.message = "fold " + nf.held + ": not simulated: " + e.what();
-      }
-      for (int c = 0; c < d.num_cells(); ++c) {
-        if (!held[c]) continue;
-        n.cells[c] = 1;
-        for (int k = 0; k < kk; ++k) {
-          const size_t o = static_cast<size_t>(c) * kk + k;
-          n.z_baseline[o] = zb[o];
-          n.z_calibrated[o] = z0[o];
-          n.z_selected[o] = z1[o];
-          n.z_simulated[o] = zs[o];
-        }
-      }
-    } catch (const std::exception& e) {
-      n.message = "fold " + nf.held + ": " + e.what();
+  for (FoldRun& run : runs) {
+    if (run.fold.cells == 0) continue;
+    if (!run.ok) {
+      n.message = run.message;
       return n;
     }
-    n.folds.push_back(nf);
+    if (!run.fold.simulated) {
+      all_simulated = false;
+      n.message = run.message;
+    }
+    n.gain += run.fold.deviance_calibrated - run.fold.deviance_selected;
+    for (int c = 0; c < d.num_cells(); ++c) {
+      if (!run.held[c]) continue;
+      n.cells[c] = 1;
+      for (int k = 0; k < kk; ++k) {
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        n.z_baseline[o] = run.zb[o];
+        n.z_calibrated[o] = run.z0[o];
+        n.z_selected[o] = run.z1[o];
+        n.z_simulated[o] = run.zs[o];
+      }
+    }
+    n.folds.push_back(std::move(run.fold));
   }
   n.baseline = Stat(full, n.z_baseline, n.cells);
   n.calibrated = Stat(full, n.z_calibrated, n.cells);

@@ -261,10 +261,26 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       Eigen::VectorXd beta;
       Eigen::MatrixXd c_inv;
       r.Objective(a, b, &beta, &c_inv);
+      // The departures' z under the law first; a tail inflates the law it is judged by, so the
+      // z's are read against their own robust scale (1.4826·median |z| of the points not
+      // flagged) where that is below 1.
+      std::vector<double> zs(blocks, 0.0);
       bool changed = false;
       int used = 0;
+      for (int pass = 0; pass < 2; ++pass) {
+      double z_scale = 1.0;
+      if (pass == 1) {
+        std::vector<double> az;
+        for (int j = 0; j < blocks; ++j)
+          if (!flag[block_point[j]]) az.push_back(std::fabs(zs[j]));
+        if (!az.empty()) {
+          std::nth_element(az.begin(), az.begin() + az.size() / 2, az.end());
+          z_scale = std::clamp(1.4826 * az[az.size() / 2], 0.2, 1.0);
+        }
+      }
       for (int j = 0; j < blocks; ++j) {
         const int t = block_point[j];
+        if (flag[t]) continue;  // a flag stays: the search only grows (it cannot oscillate)
         const double s = r.s[j];
         const double m = (r.w[j] - r.v[j].dot(beta)) / s;  // mean residual about X·β
         const double tau = a * r.f0[j] + b * r.f1[j];
@@ -274,13 +290,16 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
         const double own = tau * tau + 1.0 / s;
         const double var = own + (flag[t] ? lev : -lev);
         pe.departure[k][t] = m;
-        pe.departure_z[k][t] = var > 1e-3 * own ? m / std::sqrt(var) : 0.0;
+        zs[j] = var > 1e-3 * own ? m / std::sqrt(var) : 0.0;
+        pe.departure_z[k][t] = zs[j] / z_scale;
+        if (pass == 0) continue;
         const bool beyond = std::fabs(pe.departure_z[k][t]) > z_crit;
-        if (beyond != static_cast<bool>(flag[t])) changed = true;
+        if (beyond) changed = true;
         flag[t] = beyond;
         r.free_tau[j] = beyond ? 1e3 * rms : 0.0;
-        used += !beyond;
       }
+      }
+      for (int j = 0; j < blocks; ++j) used += !flag[block_point[j]];
       pe.a[k] = a, pe.b[k] = b;
       pe.points_used[k] = used;
       if (!changed) break;

@@ -11,7 +11,8 @@
 // with σ_i the replicate noise (noise.h, known), X the fixed effects every camera law of the
 // registry lives in (main effects and two-factor interactions of light, distance, angle,
 // preset and emitter, but light × angle: no law of the registry makes the light change how the
-// angle acts, while one session's stand set off at one angle does), and τ the placement scatter's law in the test point's distance D:
+// angle acts, while one session's stand set off at one angle does), and τ the placement
+// scatter's law in the test point's distance D:
 //   median bias:  τ(D) = a + b·D  [m]   (a: tape and stand, independent of range; b·D: a
 //                 distance meaning or aiming error, and depth read through a panel set a
 //                 fraction of a degree off, which grow with range)
@@ -21,10 +22,15 @@
 // two-factor law explains is counted as placement, so a camera law of the registry stays a
 // fixed effect and is judged against τ, not absorbed by it.
 //
-// Heavy tail: a test point whose departure (its recordings' mean residual about X·β) exceeds
-// the law at p < alpha / test points (Bonferroni) is flagged, left out of the law's estimate
-// (iterated until no point changes), and given its own departure as its scatter, so that one
-// misplaced panel is reported as such and never taken for a camera effect.
+// Heavy tail: a test point's departure (its recordings' mean residual about X·β) is read
+// against the law, and against the departures' own robust scale where a tail has inflated the
+// law (1.4826·median |z| < 1). A point beyond p < alpha / test points (Bonferroni) is flagged,
+// given a free variance in the estimate (its mean informs neither β nor the law; its preset and
+// emitter contrasts still do), and the search grows until no point joins; a flagged point gets
+// its own departure as its scatter, so that one misplaced panel is reported as such and never
+// taken for a camera effect. With two lights, light × distance and distance × angle in X leave
+// a test point only its contrast with the other light's: a misplaced point and its partner
+// depart together, and a departure is found from several times the law.
 
 #include <string>
 #include <vector>

@@ -94,7 +94,8 @@ void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
       w.Number("a", pe.a[k]).Number("b", pe.b[k]).Integer("test_points_used", pe.points_used[k]);
       w.BeginArray("at");
       for (double d : {4.0, 8.0, 12.0, 16.0}) {
-        w.BeginObject().Number("distance_m", d).Number("scatter", pe.Law(static_cast<int>(k), m, d));
+        w.BeginObject().Number("distance_m", d);
+        w.Number("scatter", pe.Law(static_cast<int>(k), m, d));
         if (m == kMedianBias)
           w.Number("pct_of_distance", 100 * pe.Law(static_cast<int>(k), m, d) / d);
         w.EndObject();

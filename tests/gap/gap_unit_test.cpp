@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <random>
 
 #include "gap/candidates.h"
 #include "gap/design.h"
 #include "gap/json.h"
 #include "gap/localize.h"
 #include "gap/noise.h"
+#include "gap/placement.h"
 #include "gap/simulations.h"
 #include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
@@ -112,15 +115,19 @@ TEST(Design, RefusesBadRowsWithTheRowNamed) {
   EXPECT_NE(why.find("no rows"), std::string::npos) << why;
 }
 
-TEST(Noise, ReplicatesGiveTheNoiseOfOneResidual) {
+TEST(Noise, ReplicatesGiveTheNoiseOfOneResidualAndTheEmitterMismatchApart) {
   Design d;
   std::string why;
   auto rows = Table();
-  // Residual noise of 0.02 m at 10 m on the median, shaped as (Z / 10 m)²: alternate signs over
-  // the pairs give |Δ| = 2·0.02·shape, so the robust scale is 1.4826·0.04/√2 ≈ 0.042.
+  // The camera's emitter adds 0.05 m at 10 m to the median (the simulator's nothing), and the
+  // twins differ by ±0.04 m at 10 m about that (signs alternating with the angle), both shaped
+  // as (Z / 10 m)². Each scenario and distance holds two twins: their mean (the mismatch) is
+  // removed, the deviations ±0.04 inflated by √(2/1), so the robust scale is
+  // 1.4826·0.04·√2/√2 = 1.4826·0.04.
   for (auto& r : rows) {
     const double shape = std::pow(r.distance_m / 10.0, 2);
-    r.median_m = r.distance_m + (r.emitter == "on" ? 0.02 : -0.02) * shape;
+    const double twin = (r.angle_deg == 0 ? 0.02 : -0.02) * (r.emitter == "on" ? 1 : -1);
+    r.median_m = r.distance_m + (twin + (r.emitter == "on" ? 0.05 : 0.0)) * shape;
   }
   ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
   Simulations s;
@@ -134,9 +141,18 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidual) {
     }
   }
   const NoiseEstimate n = EstimateNoise(d, s);
-  EXPECT_NEAR(n.scale[0], 1.4826 * 0.04 / std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR(n.scale[0], 1.4826 * 0.04, 1e-9);
   EXPECT_EQ(n.method[0], "replicates");
   EXPECT_EQ(n.pairs[0], 24);
+  int groups = 0;
+  for (const EmitterGap& e : n.emitter) {
+    if (e.k != 0) continue;
+    ++groups;
+    EXPECT_EQ(e.pairs, 2);
+    EXPECT_NEAR(e.mean, 0.05 * std::pow(e.distance_m / 10.0, 2), 1e-9);
+    EXPECT_GT(e.z, 0);
+  }
+  EXPECT_EQ(groups, 12);  // 4 scenarios × 3 distances
   EXPECT_EQ(n.method[2], "replicates + floor");  // identical rows: the floor
   // The quantization of the median adds in quadrature: one subpixel step at 12 m.
   const double q = 144.0 * s.sensor.subpixel_step_px / (s.sensor.focal_px() * s.sensor.baseline_m);
@@ -144,6 +160,64 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidual) {
   while (d.cells[far].distance_m != 12) ++far;
   EXPECT_NEAR(n.Of(d, s, far, 0),
               std::hypot(n.scale[0] * 1.44, q / std::sqrt(12.0)), 1e-12);
+}
+
+// Placement: every test point of a 2 lights × 4 distances × 4 angles table shifted by a draw of
+// τ(D) = 0.05 m + 2 % of D, its four recordings (presets, emitter) sharing it, over replicate
+// noise of 5 mm; one test point set 3 m farther (eight times the law there). REML finds the law
+// within a factor of two at 16 m and flags that test point, reading far.
+TEST(Placement, RemlFindsTheScatterLawAndFlagsTheMisplacedPoint) {
+  std::vector<records::PanelMetrics> rows;
+  for (const char* light : {"daylight", "sunset"})
+    for (double a : {0.0, 10.0, 20.0, 35.0})
+      for (double dist : {4.0, 8.0, 12.0, 16.0})
+        for (const char* preset : {"HA", "HD"})
+          for (const char* emitter : {"off", "on"})
+            rows.push_back(Row(dist, a, preset, emitter, light));
+  std::mt19937 rng(7);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::map<std::string, double> shift;
+  for (auto& r : rows) {
+    const std::string key = r.light + std::to_string(r.distance_m) + std::to_string(r.angle_deg);
+    if (!shift.count(key)) shift[key] = (0.05 + 0.02 * r.distance_m) * unit(rng);
+    if (r.light == "sunset" && r.distance_m == 12 && r.angle_deg == 20) shift[key] = 3.0;
+    r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
+  }
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  Simulations s;
+  s.metrics = d.metrics;
+  s.base.assign(d.real.size(), 0.0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    s.depth_m.push_back(d.cells[c].distance_m);
+    for (int k = 1; k < d.num_metrics(); ++k)
+      s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
+  }
+  const NoiseEstimate n = EstimateNoise(d, s);
+  const PlacementEstimate pe =
+      EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
+  ASSERT_EQ(pe.num_points, 32);
+  const double law16 = pe.Law(0, kMedianBias, 16);
+  EXPECT_GT(law16, 0.5 * 0.37) << pe.a[0] << " + " << pe.b[0] << "·D";
+  EXPECT_LT(law16, 2.0 * 0.37) << pe.a[0] << " + " << pe.b[0] << "·D";
+  // With two lights the fixed effects (light × distance, distance × angle) leave a test point
+  // only its contrast with the other light's: the misplaced point is flagged reading far, and
+  // at most its partner of the other light beside it.
+  bool found = false;
+  int flagged = 0;
+  for (int t = 0; t < pe.num_points; ++t) {
+    if (!pe.flagged[0][t]) continue;
+    ++flagged;
+    EXPECT_EQ(pe.point_distance_m[t], 12);
+    EXPECT_EQ(pe.point_angle_deg[t], 20);
+    if (pe.point_light[t] != "sunset") continue;
+    found = true;
+    EXPECT_GT(pe.departure[0][t], 1.0);
+    EXPECT_GE(pe.tau[0][t], pe.departure[0][t]);  // its own departure as its scatter
+  }
+  EXPECT_TRUE(found);
+  EXPECT_LE(flagged, 2);
 }
 
 TEST(Localize, AGapAlongOneFactorIsThatFactors) {
