@@ -73,10 +73,10 @@ std::string EstimateNoise(const std::string& bag, const detect::DetectorParams& 
   const std::string configured =
       "sigma_d " + records::NumberText(params.cluster.disparity_noise_px) + " px configured";
   if (!params.noise.from_frames) return configured;
-  io::BagReader first(bag);
+  const std::unique_ptr<io::RecordingSource> first = io::OpenRecording(bag);
   records::DepthFrame frame;
   int n = 0;
-  for (; n < params.noise.frames && first.Next(&frame); ++n) {
+  for (; n < params.noise.frames && first->Next(&frame); ++n) {
     if (!detector->Detect(frame, static_cast<std::uint64_t>(n)).success) break;
   }
   const double sigma_px = detector->temporal_noise().SigmaPx();
