@@ -2,6 +2,8 @@
 // made by scripts/make_fixture_bags.py with the truth of every pixel, intrinsic, unit and option),
 // round trips through BagWriter, and damaged or wrong input of every kind.
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -53,7 +55,9 @@ class TempDir {
  public:
   TempDir() {
     const auto* t = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = "depthbias_io_" + std::string(t->test_suite_name()) + "_" + t->name();
+    // The process id keeps two build trees' runs of the same test apart (both use /tmp).
+    std::string name = "depthbias_io_" + std::string(t->test_suite_name()) + "_" + t->name() +
+                       "_" + std::to_string(::getpid());
     std::replace(name.begin(), name.end(), '/', '_');
     path_ = fs::path(::testing::TempDir()) / name;
     fs::remove_all(path_);
