@@ -16,7 +16,14 @@ std::string Zstd(const std::uint8_t* src, std::size_t n, std::uint8_t* dst, std:
   if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != expected)
     return "zstd frame holds " + std::to_string(declared) + " bytes, the chunk says " +
            std::to_string(expected);
-  const std::size_t got = ZSTD_decompress(dst, expected, src, n);
+  // One context per thread, kept: a fresh one per chunk is allocated and initialised each time.
+  struct Context {
+    ZSTD_DCtx* dctx = ZSTD_createDCtx();
+    ~Context() { ZSTD_freeDCtx(dctx); }
+  };
+  thread_local Context context;
+  if (!context.dctx) return "zstd: cannot make a decompression context";
+  const std::size_t got = ZSTD_decompressDCtx(context.dctx, dst, expected, src, n);
   if (ZSTD_isError(got)) return std::string("zstd: ") + ZSTD_getErrorName(got);
   if (got != expected)
     return "zstd frame holds " + std::to_string(got) + " bytes, the chunk says " +

@@ -118,7 +118,7 @@ McapFile::~McapFile() {
 }
 
 bool McapFile::ReadRecord(std::uint64_t offset, std::uint64_t limit, std::uint8_t* op,
-                          std::vector<std::uint8_t>* content, std::string* why) const {
+                          McapBytes* content, std::string* why) const {
   std::uint8_t prefix[mcap::kRecordPrefix];
   if (offset > limit || limit - offset < mcap::kRecordPrefix ||
       ::pread(fd_, prefix, sizeof prefix, static_cast<off_t>(offset)) !=

@@ -18,12 +18,35 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/bag.h"
 #include "io/mcap_records.h"
 
 namespace depthbias::io {
+
+// Bytes that resize() leaves uninitialised: every chunk is overwritten by pread or the
+// decompressor at once, and zero-filling 2 MB per frame first costs as much as a CRC.
+template <typename T>
+struct UninitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = UninitAllocator<U>;
+  };
+  UninitAllocator() = default;
+  template <typename U>
+  UninitAllocator(const UninitAllocator<U>&) {}
+  template <typename U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+using McapBytes = std::vector<std::uint8_t, UninitAllocator<std::uint8_t>>;
 
 struct McapContents {
   mcap::Header header;
@@ -67,10 +90,10 @@ class McapFile {
   void Scan();  // no usable summary: channels, counts and the readable end from the records
   // Reads the record whose prefix is at offset; false (and *why) when it runs past limit.
   bool ReadRecord(std::uint64_t offset, std::uint64_t limit, std::uint8_t* op,
-                  std::vector<std::uint8_t>* content, std::string* why) const;
+                  McapBytes* content, std::string* why) const;
   // One chunk read, decompressed and checked (its CRC), or why not; safe on any thread.
   struct Loaded {
-    std::vector<std::uint8_t> raw, plain;
+    McapBytes raw, plain;
     const std::uint8_t* records = nullptr;
     std::size_t size = 0;
     std::string compression;  // "none", "zstd", "lz4"
@@ -93,7 +116,7 @@ class McapFile {
   McapContents contents_;
   std::map<std::uint64_t, std::set<std::uint16_t>> chunk_channels_;  // by chunk start offset
   std::vector<std::uint64_t> order_;  // indexed chunks' offsets, ascending
-  std::vector<std::uint8_t> record_;
+  McapBytes record_;
   std::map<std::uint64_t, std::future<std::shared_ptr<Loaded>>> ahead_;
   std::shared_ptr<Loaded> current_;  // the chunk the walk is in
   std::unique_ptr<Walk> walk_;
