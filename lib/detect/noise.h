@@ -1,14 +1,12 @@
 #pragma once
 // The disparity noise σ_d of a recording, from its own frames: the temporal spread at its
-// obstacles. Between two consecutive frames the disparity d = f·B/Z of a static surface seen by
-// one pixel changes by the noise of both frames, so σ_d = σ(Δd)/√2. The spread is the RMS of
-// Δd within five robust scales (1.4826·median |Δd|), which leaves out the few pixels where an
-// edge or a hole changed the surface; the median alone would jump between the values of the
-// camera's 1/32 px disparity lattice. A camera that moves between frames widens Δd: σ_d then
-// comes out larger, which makes the margin wider, not narrower.
+// obstacles (camera/disparity_noise.h: σ_d = σ(Δd)/√2 of consecutive frames, robust RMS). A
+// camera that moves between frames widens Δd: σ_d then comes out larger, which makes the margin
+// wider, not narrower.
 
 #include <string>
-#include <vector>
+
+#include "camera/disparity_noise.h"
 
 namespace depthbias::detect {
 
@@ -19,20 +17,8 @@ struct NoiseParams {
   bool IsValid(std::string* why) const;
 };
 
-// |Δd| samples in a histogram (0.001 px bins up to 4 px, beyond: the top bin), so that any
-// number of frames takes the same memory.
-class TemporalNoise {
- public:
-  TemporalNoise();
-  void Add(double delta_disparity_px);
-  long long pairs() const { return pairs_; }
-  // σ_d = RMS(Δd within 5·1.4826·median|Δd|)/√2 [px]; NaN without pairs.
-  double SigmaPx() const;
-  void Clear();
-
- private:
-  std::vector<long long> bins_;
-  long long pairs_ = 0;
-};
+// The estimator itself is camera's (one definition, shared with the metrics kernel's panel
+// measurement, the metrics CSV's sigma_d_px).
+using camera::TemporalNoise;
 
 }  // namespace depthbias::detect

@@ -1,0 +1,33 @@
+#pragma once
+// The temporal disparity noise σ_d of a stereo camera, from consecutive frames of a static
+// surface: between two frames the disparity d = f·B/Z seen by one pixel changes by the noise of
+// both, so σ_d = σ(Δd)/√2. The spread is the RMS of Δd within five robust scales
+// (1.4826·median |Δd|), which leaves out the few pixels where an edge or a hole changed the
+// surface; the median alone would jump between the values of the camera's 1/32 px disparity
+// lattice. A camera that moves between frames widens Δd: σ_d then comes out larger.
+//
+// The one estimator of σ_d: the metrics kernel measures it on the panel (the metrics CSV's
+// sigma_d_px, lib/metrics), the obstacle detector at its obstacles (lib/detect/noise.h).
+
+#include <vector>
+
+namespace depthbias::camera {
+
+// |Δd| samples in a histogram (0.001 px bins up to 4 px, beyond: the top bin), so that any
+// number of frames takes the same memory.
+class TemporalNoise {
+ public:
+  TemporalNoise();
+  // Δd = f·B·(1/Z − 1/Z_prev) of one pixel valid in two consecutive frames [px]; NaN ignored.
+  void Add(double delta_disparity_px);
+  long long pairs() const { return pairs_; }
+  // σ_d = RMS(Δd within 5·1.4826·median|Δd|)/√2 [px]; NaN without pairs.
+  double SigmaPx() const;
+  void Clear();
+
+ private:
+  std::vector<long long> bins_;
+  long long pairs_ = 0;
+};
+
+}  // namespace depthbias::camera
