@@ -87,7 +87,8 @@ if [ ! -s "$OUT/sim_extract.csv" ]; then
   FAILED+=("panel_extract wrote no table (exit $extract_status)")
   FOUND="none"
 else
-  FOUND=$(awk -F, 'NR > 1 && $22 == "ok" { n++ } END { print n + 0 }' "$OUT/sim_extract.csv")
+  FOUND=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "status") s = i; next }
+    s && $s == "ok" { n++ } END { print n + 0 }' "$OUT/sim_extract.csv")
   $PY scripts/plot_error_vs_distance.py --in "$OUT/sim_extract.csv" \
     --out "$OUT/figures/fig4_sim_extract.png" \
     --title "Simulated protocol through panel_extract: median depth - nominal distance"

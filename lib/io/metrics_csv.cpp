@@ -36,6 +36,7 @@ const NumberColumn kNumbers[] = {
     {"region_px", &PanelMetrics::region_px, rules::kCount},
     {"subpixel_rms_px", &PanelMetrics::subpixel_rms_px, rules::kNonNegative},
     {"temporal_std_m", &PanelMetrics::temporal_std_m, rules::kSpreadM},
+    {"sigma_d_px", &PanelMetrics::sigma_d_px, rules::kNonNegative},
 };
 constexpr int kArticleNumbers = 8;  // distance_m … valid_pct
 

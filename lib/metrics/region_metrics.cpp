@@ -52,6 +52,10 @@ bool KernelParams::IsValid(std::string* why) const {
     *why = "region_margin_px must be zero or positive";
     return false;
   }
+  if (min_noise_pairs < 1) {
+    *why = "min_noise_pairs must be >= 1";
+    return false;
+  }
   return true;
 }
 
@@ -77,6 +81,7 @@ RegionMetrics::RegionMetrics(const camera::Intrinsics& intrinsics, const PanelRe
   }
   sums_.resize(pixels_.size());
   gathered_.resize(pixels_.size());
+  previous_.resize(pixels_.size(), 0);
 }
 
 void RegionMetrics::AddFrame(const records::DepthFrame& frame) {
@@ -91,6 +96,17 @@ void RegionMetrics::AddRegionCounts(const std::uint16_t* counts, double units) {
   } else if (units != depth_units_m_) {
     mixed_units_ = true;
   }
+  // Temporal disparity noise: pixels valid in this frame and the one before (the first frame
+  // has none before it; a change of depth units is refused in Finish anyway).
+  if (frames_ > 0 && !mixed_units_) {
+    const double fb_units = intrinsics_.fx * params_.baseline_m / units;  // f·B/Z = fb_units/c
+    for (std::size_t k = 0; k < pixels_.size(); ++k) {
+      const std::uint16_t c = counts[k], p = previous_[k];
+      if (c == 0 || p == 0) continue;
+      temporal_noise_.Add(fb_units * (1.0 / c - 1.0 / p));
+    }
+  }
+  std::copy(counts, counts + pixels_.size(), previous_.begin());
   ++frames_;
   bool any = false;
   for (std::size_t k = 0; k < pixels_.size(); ++k) {
@@ -171,6 +187,8 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
   m->median_m = HistMedian(depth_hist_, n) * depth_units_m_;
   m->range_m = HistMedian(range_hist_, n) * depth_units_m_;
   m->temporal_std_m = Median(std::move(temporal));
+  res.noise_pairs = temporal_noise_.pairs();
+  if (res.noise_pairs >= params_.min_noise_pairs) m->sigma_d_px = temporal_noise_.SigmaPx();
   res.plane = FitPlane(mom);
   if (res.plane.ok) m->plane_std_m = res.plane.rms_m;
 

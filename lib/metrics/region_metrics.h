@@ -26,6 +26,10 @@
 //                    added back for the region's margin), and the direction of its centre
 //                    (azimuth + right, elevation + up)
 //   region_px        pixels in the region
+//   sigma_d_px       temporal disparity noise σ_d: Δd = f·B·(1/Z − 1/Z_prev) of every region
+//                    pixel valid in two consecutive frames, σ_d = robust RMS(Δd)/√2
+//                    (camera/disparity_noise.h, the estimator the obstacle detector uses at its
+//                    obstacles); NaN with fewer than min_noise_pairs pairs
 
 #include <cstdint>
 #include <string>
@@ -33,6 +37,7 @@
 
 #include <Eigen/Core>
 
+#include "camera/disparity_noise.h"
 #include "camera/intrinsics.h"
 #include "metrics/geometry.h"
 #include "records/depth_frame.h"
@@ -45,6 +50,8 @@ struct KernelParams {
   // The region's margin (pixel footprints a side, as drawn by RegionFromRectangle): added back
   // to the extent of the sampled pixels so the panel's size is not reported short.
   double region_margin_px = 0.5;
+  // Fewer pixel pairs (valid in two consecutive frames) than this: sigma_d_px is not measured.
+  int min_noise_pairs = 200;
 
   bool IsValid(std::string* why) const;
 };
@@ -63,6 +70,7 @@ struct KernelResult {
   std::uint64_t samples = 0;    // valid samples pooled over frames
   std::uint64_t frames = 0;     // frames added
   std::uint64_t frames_with_depth = 0;
+  long long noise_pairs = 0;    // pixel pairs behind sigma_d_px
 };
 
 class RegionMetrics {
@@ -96,6 +104,8 @@ class RegionMetrics {
   std::vector<float> range_per_count_;  // |ray| per region pixel
   std::vector<PixelSums> sums_;
   std::vector<std::uint16_t> gathered_;
+  std::vector<std::uint16_t> previous_;  // the frame before's counts (sigma_d_px)
+  camera::TemporalNoise temporal_noise_;
   std::vector<std::uint64_t> depth_hist_;  // by depth count
   std::vector<std::uint64_t> range_hist_;  // by range in depth units
   double depth_units_m_ = 0.0;

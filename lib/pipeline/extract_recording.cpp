@@ -1,5 +1,6 @@
 #include "pipeline/extract_recording.h"
 
+#include <cmath>
 #include <new>
 #include <stdexcept>
 
@@ -58,8 +59,15 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
       if (truth->preset) m.preset = *truth->preset;
       if (truth->emitter) m.emitter = *truth->emitter;
     }
+    // B of the metrics in disparity units (subpixel_rms_px, sigma_d_px): the recording's own
+    // Stereo_Baseline [mm] when it holds one, else the configured one.
+    panel::PanelParams used = params;
+    const auto baseline = info.options.find("Stereo_Baseline");
+    if (baseline != info.options.end() && baseline->second > 0 &&
+        std::isfinite(baseline->second))
+      used.baseline_m = baseline->second / 1000.0;
     panel::PrefetchSource ahead(source.get(), 8);  // read on one core, measure on the other
-    r = panel::ExtractPanel(ahead, in, params, window, box);
+    r = panel::ExtractPanel(ahead, in, used, window, box);
     const records::PanelMetrics known = m;  // what the manifest and the bag say
     m = r.metrics;
     m.bag = known.bag;

@@ -36,6 +36,9 @@ struct PanelMetrics {
   double region_px = kMissing;        // pixels in the panel's image region
   double subpixel_rms_px = kMissing;  // plane residuals in disparity units (Depth Quality Tool)
   double temporal_std_m = kMissing;   // median over region pixels of per-pixel std over time
+  // Temporal disparity noise σ_d of the panel region: robust RMS of the disparity change of a
+  // pixel between consecutive frames, / √2 (NaN: not measured, e.g. the article's rows).
+  double sigma_d_px = kMissing;
 
   std::string status = "ok";  // "ok", "no_panel", "error", ...
   std::string message;

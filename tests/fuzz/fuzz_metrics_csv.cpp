@@ -34,7 +34,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const auto& b = back[i];
     if (a.bag != b.bag || a.light != b.light || a.status != b.status || a.message != b.message ||
         !Same(a.median_m, b.median_m) || !Same(a.distance_m, b.distance_m) ||
-        !Same(a.angle_deg, b.angle_deg) || !Same(a.temporal_std_m, b.temporal_std_m))
+        !Same(a.angle_deg, b.angle_deg) || !Same(a.temporal_std_m, b.temporal_std_m) ||
+        !Same(a.sigma_d_px, b.sigma_d_px))
       __builtin_trap();
   }
   return 0;

@@ -65,6 +65,7 @@ TEST(MetricsCsv, WriteThenReadRoundTripsEveryColumn) {
   m.region_px = 1234;
   m.subpixel_rms_px = 0.07;
   m.temporal_std_m = 0.004;
+  m.sigma_d_px = 0.070123456789012;
   records::PanelMetrics failed;
   failed.bag = "broken.bag";
   failed.distance_m = 8;
@@ -78,6 +79,8 @@ TEST(MetricsCsv, WriteThenReadRoundTripsEveryColumn) {
   ASSERT_EQ(back.size(), 2u);
   EXPECT_EQ(back[0].bag, m.bag);
   EXPECT_EQ(back[0].temporal_std_m, m.temporal_std_m);
+  EXPECT_EQ(back[0].sigma_d_px, m.sigma_d_px);  // exactly
+  EXPECT_TRUE(std::isnan(back[1].sigma_d_px));   // an empty cell: not measured
   EXPECT_EQ(back[0].region_px, m.region_px);
   EXPECT_EQ(back[0].range_m, m.range_m);
   EXPECT_FALSE(back[1].ok());
@@ -88,8 +91,32 @@ TEST(MetricsCsv, WriteThenReadRoundTripsEveryColumn) {
   EXPECT_EQ(text.substr(0, text.find('\n')),
             "bag,light,emitter,preset,distance_m,angle_deg,frames,mean_m,median_m,plane_std_m,"
             "hole_rate_pct,valid_pct,range_m,azimuth_deg,elevation_deg,normal_tilt_deg,"
-            "panel_width_m,panel_height_m,region_px,subpixel_rms_px,temporal_std_m,status,"
-            "message");
+            "panel_width_m,panel_height_m,region_px,subpixel_rms_px,temporal_std_m,sigma_d_px,"
+            "status,message");
+}
+
+// sigma_d_px is optional: tables without the column (the article's, tables written before it)
+// read it as not measured; a cell may be empty or nan; a negative one is refused.
+TEST(MetricsCsv, SigmaDColumnIsOptional) {
+  const auto old = ParseMetricsCsv(std::string(kHeader12) + "x,d,on,HA,4,0,10,4,4,0.1,1,99\n",
+                                   "m.csv");
+  ASSERT_EQ(old.size(), 1u);
+  EXPECT_TRUE(std::isnan(old[0].sigma_d_px));
+  const std::string header =
+      std::string(kHeader12).substr(0, std::strlen(kHeader12) - 1) + ",sigma_d_px\n";
+  const auto rows = ParseMetricsCsv(header + "x,d,on,HA,4,0,10,4,4,0.1,1,99,0.0712\n" +
+                                        "y,d,on,HA,8,0,10,8,8,0.1,1,99,\n" +
+                                        "z,d,on,HA,12,0,10,12,12,0.1,1,99,nan\n",
+                                    "m.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].sigma_d_px, 0.0712);
+  EXPECT_TRUE(std::isnan(rows[1].sigma_d_px));
+  EXPECT_TRUE(std::isnan(rows[2].sigma_d_px));
+  const auto back = ParseMetricsCsv(FormatMetricsCsv(rows), "back.csv");
+  EXPECT_EQ(back[0].sigma_d_px, 0.0712);
+  EXPECT_TRUE(std::isnan(back[1].sigma_d_px));
+  const std::string e = ErrorOf(header + "x,d,on,HA,4,0,10,4,4,0.1,1,99,-0.07\n");
+  EXPECT_NE(e.find("m.csv:2: column 'sigma_d_px'"), std::string::npos) << e;
 }
 
 TEST(MetricsCsv, MissingColumnIsNamed) {

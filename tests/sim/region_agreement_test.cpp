@@ -11,8 +11,8 @@
 //  - hole rate and valid %: that many pixels' worth of the region, 100·(2·side + 2)/px;
 //  - width, height: a column or row on each side, two pixel footprints 2·Z/f;
 //  - azimuth, elevation: one pixel's angle 1/f rad, + 0.01° for the plane's noise;
-//  - plane_std, subpixel_rms, temporal_std: statistics of the samples, held relatively to three
-//    times the share of the region that row and column make, 3·(2·side + 2)/px, + 1 %;
+//  - plane_std, subpixel_rms, temporal_std, sigma_d: statistics of the samples, held relatively
+//    to three times the share of the region that row and column make, 3·(2·side + 2)/px, + 1 %;
 //  - normal tilt: 1.5 standard errors of the inverse-depth plane's slope, + 0.1°.
 // The table printed gives, per column, the cells beyond their tolerance and the largest
 // difference in units of it. The manifest's truth (true_hole_rate_pct) is the metrics-only hole
@@ -90,6 +90,8 @@ std::vector<Column> Columns() {
       {"subpixel_rms_px", [](const M& m) { return m.subpixel_rms_px; },
        [=](const M& s) { return 3 * share(s) + 0.01; }, true},
       {"temporal_std_m", [](const M& m) { return m.temporal_std_m; },
+       [=](const M& s) { return 3 * share(s) + 0.01; }, true},
+      {"sigma_d_px", [](const M& m) { return m.sigma_d_px; },
        [=](const M& s) { return 3 * share(s) + 0.01; }, true},
       {"normal_tilt_deg", [](const M& m) { return m.normal_tilt_deg; },
        [](const M& s) {
