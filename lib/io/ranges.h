@@ -60,6 +60,9 @@ constexpr NumberRule kPositiveCount{1.0, kInf, false, true, "", true};
 // Depth units [m per count]: the D455 offers 1e-6 to 0.01 m; wider bounds leave room for other
 // devices and float32 rounding, and still refuse 0, negative, NaN and absurd scales.
 constexpr NumberRule kDepthUnitsM{1e-7, 0.1, false, false, "m"};
+// A disparity noise σ_d [px]: positive (a margin of zero noise claims too much), and far below
+// any disparity a stereo camera searches (the D455's is 0–95 px at 1280×720, 1/32 px steps).
+constexpr NumberRule kDisparityNoisePx{0.0, 100.0, true, false, "px"};
 // Standard deviations and errors in metres: zero or more, finite.
 constexpr NumberRule kSpreadM{0.0, kInf, false, true, "m"};
 }  // namespace rules

@@ -188,6 +188,12 @@ std::string FormatWeightsYaml(const records::BiasWeights& w) {
           << "weighted" << YAML::Value << g.margin.weighted << YAML::Key << "errors"
           << YAML::Value << g.margin.errors << YAML::EndMap;
     }
+    if (g.disparity_noise.known) {
+      out << YAML::Key << "disparity_noise" << YAML::Value << YAML::Flow << YAML::BeginMap
+          << YAML::Key << "sigma_px" << YAML::Value << Num(g.disparity_noise.sigma_px)
+          << YAML::Key << "recordings" << YAML::Value << g.disparity_noise.recordings
+          << YAML::EndMap;
+    }
     auto cv_map = [&out](const records::BiasCrossValidation& cv) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "scheme" << YAML::Value << cv.scheme
           << YAML::Key << "rmse_m" << YAML::Value << Num(cv.rmse_m) << YAML::Key << "mae_m"
@@ -286,7 +292,8 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
     } else {
       r.OnlyKeys(gn, p,
                  {"light", "preset", "emitter", "n", "weights", "knots_deg", "rmse_m", "mae_m",
-                  "residual_std_m", "margin", "cv", "cv_more", "covariance"});
+                  "residual_std_m", "margin", "disparity_noise", "cv", "cv_more",
+                  "covariance"});
     }
     records::BiasWeightsGroup g;
     g.light = r.String(r.Need(gn, "light", p + ".light"), p + ".light");
@@ -343,6 +350,19 @@ records::BiasWeights ParseWeightsYaml(const std::string& text, const std::string
                        " and noise_per_m " + records::NumberText(g.margin.noise_per_m) +
                        " give a sigma that overflows at " + records::NumberText(far_m) + " m");
       }
+    }
+    if (const YAML::Node dn = gn["disparity_noise"]; dn) {
+      const std::string dp = p + ".disparity_noise";
+      if (!dn.IsMap()) r.Fail(dp, "expected a map {sigma_px, recordings}");
+      r.OnlyKeys(dn, dp, {"sigma_px", "recordings"});
+      g.disparity_noise.known = true;
+      g.disparity_noise.sigma_px = r.Checked(r.Need(dn, "sigma_px", dp + ".sigma_px"),
+                                             dp + ".sigma_px", rules::kDisparityNoisePx);
+      g.disparity_noise.recordings =
+          r.Int(r.Need(dn, "recordings", dp + ".recordings"), dp + ".recordings");
+      if (g.disparity_noise.recordings < 1)
+        r.Fail(dp + ".recordings", std::to_string(g.disparity_noise.recordings) +
+                                       " recordings; a measured sigma_px has at least 1");
     }
     if (gn["cv"]) {
       const auto cv = r.Cv(gn["cv"], p + ".cv");

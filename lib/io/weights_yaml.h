@@ -10,13 +10,16 @@
 //     - {light, preset, [emitter], n, weights: {name: value, ...}, [knots_deg: [...]],
 //        rmse_m, mae_m, residual_std_m,
 //        [margin: {placement_m, noise_per_m, weighted, [errors: held_out|in_sample]}],
+//        [disparity_noise: {sigma_px, recordings}],
 //        cv: {scheme: point|distance|angle|none, rmse_m, mae_m}, [cv_more: [...]],
 //        covariance: [[...], ...]}
 //   provenance: {input_file, input_sha256, tool, tool_version}
 //
 // Schema depthbias.weights/1 (before margins: no near_guard, noise_pooled, margin) is still
 // read; its groups have margin.known = false and their predictive σ is the constant residual std
-// of that time. Files are always written as /2.
+// of that time. Files are always written as /2. `disparity_noise` (the unit's σ_d in the group's
+// scenario: the median of its recordings' sigma_d_px and how many) is optional: files written
+// before it, or from tables that did not measure it, read with disparity_noise.known = false.
 
 #include <string>
 

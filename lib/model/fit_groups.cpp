@@ -114,6 +114,7 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
     gr.group = g;
     gr.samples = samples[k];
     gr.fit = joint.fits[k];
+    gr.disparity_noise = GroupDisparityNoise(rows, g);
     // Cross-validation of the whole procedure; the other scenarios' errors stay as fitted.
     std::vector<ResidualData> others;
     for (size_t o = 0; o < joint.errors.size(); ++o)
@@ -158,6 +159,24 @@ FitReport FitGroups(const std::vector<records::PanelMetrics>& rows,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.success = true;
   return report;
+}
+
+records::BiasDisparityNoise GroupDisparityNoise(const std::vector<records::PanelMetrics>& rows,
+                                               const Group& group) {
+  records::BiasDisparityNoise out;
+  if (group.preset == "*") return out;
+  std::vector<double> v;
+  for (size_t i : group.rows) {
+    const double s = rows.at(i).sigma_d_px;
+    if (std::isfinite(s) && s > 0) v.push_back(s);
+  }
+  if (v.empty()) return out;
+  std::sort(v.begin(), v.end());
+  const size_t mid = v.size() / 2;
+  out.known = true;
+  out.sigma_px = v.size() % 2 ? v[mid] : 0.5 * (v[mid - 1] + v[mid]);
+  out.recordings = static_cast<int>(v.size());
+  return out;
 }
 
 std::vector<FitParams> DefaultCandidates(const FitParams& base) {
@@ -256,6 +275,16 @@ std::string FormatFitTable(const FitReport& report, const FitGroupsParams& param
       out += "\n";
     }
   }
+  std::string noise;
+  for (const auto& g : report.groups) {
+    if (!g.disparity_noise.known) continue;
+    std::snprintf(buf, sizeof(buf), " %s %.4g px (%d)", g.group.Label().c_str(),
+                  g.disparity_noise.sigma_px, g.disparity_noise.recordings);
+    noise += buf;
+  }
+  if (!noise.empty())
+    out += "disparity noise sigma_d (median of the recordings' sigma_d_px, recordings):" + noise +
+           "\n";
   return out;
 }
 
@@ -398,6 +427,7 @@ records::BiasWeights ToWeights(const FitReport& report, const FitGroupsParams& p
       g.margin.weighted = gr.fit.margin_weighted;
       g.margin.errors = gr.fit.margin_in_sample ? "in_sample" : "held_out";
     }
+    g.disparity_noise = gr.disparity_noise;
     if (gr.fit.covariance_ok) {
       const auto& c = gr.fit.covariance;
       for (Eigen::Index i = 0; i < c.rows(); ++i) {

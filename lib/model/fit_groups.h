@@ -37,6 +37,8 @@ struct GroupReport {
   std::vector<CvResult> cv;  // as FitGroupsParams::cv, kNone left out
   CvResult nested;           // when nested_candidates were given
   std::vector<int> nested_chosen;  // candidate chosen in each outer fold
+  // The unit's disparity noise σ_d in this scenario (GroupDisparityNoise).
+  records::BiasDisparityNoise disparity_noise;
 };
 
 struct FitReport {
@@ -57,6 +59,12 @@ struct FitReport {
 // A cross-validation the design cannot support (e.g. leave-one-distance-out with two
 // distances) does not fail the run: its result says why and a warning names it.
 FitReport FitGroups(const std::vector<records::PanelMetrics>& rows, const FitGroupsParams& params);
+
+// σ_d of a group's scenario: the median (the mean of the two middle values for an even count)
+// of its rows' sigma_d_px where they measured it (finite, > 0), with how many. Not known when no
+// row measured it, or when the group pools presets (preset "*": σ_d is a preset's, DESIGN.md).
+records::BiasDisparityNoise GroupDisparityNoise(const std::vector<records::PanelMetrics>& rows,
+                                               const Group& group);
 
 // Every form × {none, huber} with the fit's other settings: the candidates of a nested check.
 std::vector<FitParams> DefaultCandidates(const FitParams& base);

@@ -27,6 +27,14 @@ struct BiasMargin {
   std::string errors = "held_out";
 };
 
+// The unit's temporal disparity noise σ_d in a scenario: the median of its recordings'
+// sigma_d_px (the metrics CSV), the reading noise of the obstacle detector's margin.
+struct BiasDisparityNoise {
+  bool known = false;    // false: the rows did not measure it (or weights from before it)
+  double sigma_px = 0.0;  // σ_d [px], > 0
+  int recordings = 0;     // rows whose sigma_d_px the median is of
+};
+
 // One fitted scenario (a group of rows, e.g. one light and preset).
 struct BiasWeightsGroup {
   std::string light;   // the group's light, or "*" when light is not a grouping key
@@ -42,6 +50,7 @@ struct BiasWeightsGroup {
   std::vector<BiasCrossValidation> cv;  // one entry per scheme run
   std::vector<std::vector<double>> covariance;  // of values, names × names; empty if unknown
   BiasMargin margin;
+  BiasDisparityNoise disparity_noise;  // written only for a group of one preset
 };
 
 struct BiasWeights {

@@ -1,6 +1,9 @@
 #include "io/weights_yaml.h"
 
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -96,6 +99,58 @@ TEST(WeightsYaml, UnknownKeysAreNamed) {
   EXPECT_NE(ErrorOf(bad).find("'provenance.tool_versoin': unknown key"), std::string::npos)
       << ErrorOf(bad);
   EXPECT_EQ(ErrorOf(text), "");
+}
+
+// The unit's disparity noise per group: written where known, read back exactly; weights
+// written before it (or from tables that did not measure it) read with it unknown.
+TEST(WeightsYaml, DisparityNoiseRoundTripsAndIsOptional) {
+  auto w = Example();
+  w.groups[1].disparity_noise = {true, 0.15016384726, 16};
+  const std::string text = FormatWeightsYaml(w);
+  EXPECT_NE(text.find("disparity_noise: {sigma_px: 0.15016384726, recordings: 16}"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("disparity_noise"), text.rfind("disparity_noise")) << "group 0 has none";
+  const auto back = ParseWeightsYaml(text, "w.yaml");
+  EXPECT_FALSE(back.groups[0].disparity_noise.known);
+  ASSERT_TRUE(back.groups[1].disparity_noise.known);
+  EXPECT_EQ(back.groups[1].disparity_noise.sigma_px, 0.15016384726);
+  EXPECT_EQ(back.groups[1].disparity_noise.recordings, 16);
+  // Without the key (a file of before): loads, nothing known.
+  const auto old = ParseWeightsYaml(FormatWeightsYaml(Example()), "old.yaml");
+  for (const auto& g : old.groups) EXPECT_FALSE(g.disparity_noise.known);
+}
+
+// A σ_d that is not a positive number of pixels, or a count that is not one, is refused in one
+// line naming the file and the key.
+TEST(WeightsYaml, BadDisparityNoiseIsRefusedNamingTheKey) {
+  auto w = Example();
+  w.groups[0].disparity_noise = {true, 0.07, 16};
+  const std::string text = FormatWeightsYaml(w);
+  const std::string good = "disparity_noise: {sigma_px: 0.07, recordings: 16}";
+  ASSERT_NE(text.find(good), std::string::npos) << text;
+  const std::string key = "groups[0].disparity_noise";
+  for (const auto& [value, says] : std::vector<std::pair<std::string, std::string>>{
+           {"{sigma_px: small, recordings: 16}", key + ".sigma_px': 'small' is not a number"},
+           {"{sigma_px: -0.07, recordings: 16}", key + ".sigma_px': -0.07 is outside (0, 100] px"},
+           {"{sigma_px: 0, recordings: 16}", key + ".sigma_px': 0 is outside (0, 100] px"},
+           {"{sigma_px: .nan, recordings: 16}", key + ".sigma_px': nan is not a finite number"},
+           {"{sigma_px: .inf, recordings: 16}", key + ".sigma_px': inf is not a finite number"},
+           {"{sigma_px: 1e9, recordings: 16}", key + ".sigma_px': 1e+09 is outside (0, 100] px"},
+           {"{sigma_px: [0.07], recordings: 16}", key + ".sigma_px': expected a number"},
+           {"{sigma_px: 0.07, recordings: 0}", key + ".recordings': 0 recordings"},
+           {"{sigma_px: 0.07, recordings: 2.5}", key + ".recordings': '2.5' is not an integer"},
+           {"{sigma_px: 0.07}", key + ".recordings': missing"},
+           {"{recordings: 16}", key + ".sigma_px': missing"},
+           {"{sigma_px: 0.07, recordings: 16, sigma: 1}", key + ".sigma': unknown key"},
+           {"0.07", key + "': expected a map {sigma_px, recordings}"}}) {
+    std::string bad = text;
+    bad.replace(bad.find(good) + 17, good.size() - 17, value);
+    const std::string e = ErrorOf(bad);
+    EXPECT_EQ(e.rfind("w.yaml: key '", 0), 0u) << value << " -> " << e;
+    EXPECT_NE(e.find(says), std::string::npos) << value << " -> " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  }
 }
 
 }  // namespace

@@ -145,6 +145,68 @@ TEST(FitBiasApp, DefaultModelBeatsPaper6OutOfSample) {
   }
 }
 
+// The unit's σ_d per group (light × preset): the median of the group's ok rows' sigma_d_px with
+// their number; nothing for a group none of whose rows measured it, nothing when the table has
+// no such column (the article's), nothing for a group that pools presets.
+TEST(FitBiasApp, WritesTheUnitsDisparityNoisePerGroup) {
+  const auto dir = Dir();
+  const std::string w_article = (dir / "article.yaml").string();
+  ASSERT_EQ(Exec("fit_bias", "--cv none --in " + kArticle + " --out " + w_article, dir).code, 0);
+  EXPECT_EQ(io::ReadFile(w_article).find("disparity_noise"), std::string::npos);
+  for (const auto& g : io::ReadWeightsYaml(w_article).groups)
+    EXPECT_FALSE(g.disparity_noise.known) << g.light << "/" << g.preset;
+
+  // daylight/HA: every row, 0.050 + 0.001·i (i = 0 … 31, median 0.0655); daylight/HD: every
+  // row but one, 0.15 each; sunset/HA: none; sunset/HD: the 8 m rows only, 0.2 and 0.3 in turn.
+  // A failed row (not ok) with a wild value counts for nothing.
+  auto rows = io::ReadMetricsCsv(kArticle);
+  std::map<std::string, int> seen;
+  int sunset_hd_8m = 0;
+  for (auto& r : rows) {
+    const std::string group = r.light + "/" + r.preset;
+    const int i = seen[group]++;
+    if (group == "daylight/HA") r.sigma_d_px = 0.050 + 0.001 * i;
+    if (group == "daylight/HD" && i > 0) r.sigma_d_px = 0.15;
+    if (group == "sunset/HD" && r.distance_m == 8) r.sigma_d_px = sunset_hd_8m++ % 2 ? 0.3 : 0.2;
+  }
+  records::PanelMetrics failed = rows.front();
+  failed.bag = "failed.bag";
+  failed.status = "no_panel";
+  failed.sigma_d_px = 50;
+  rows.push_back(failed);
+  const std::string table = (dir / "with_sigma.csv").string();
+  io::WriteMetricsCsv(table, rows);
+  const std::string w = (dir / "w.yaml").string();
+  const AppRun r = Exec("fit_bias", "--cv none --in " + table + " --out " + w, dir);
+  ASSERT_EQ(r.code, 1) << r.err;  // written; one row failed upstream
+  EXPECT_NE(r.out.find("disparity noise sigma_d (median of the recordings' sigma_d_px, "
+                       "recordings): daylight/HA 0.0655 px (32) daylight/HD 0.15 px (31) "
+                       "sunset/HD"),
+            std::string::npos)
+      << r.out;
+  std::map<std::string, records::BiasDisparityNoise> noise;
+  for (const auto& g : io::ReadWeightsYaml(w).groups)
+    noise[g.light + "/" + g.preset] = g.disparity_noise;
+  ASSERT_EQ(noise.size(), 4u);
+  ASSERT_TRUE(noise["daylight/HA"].known);
+  EXPECT_NEAR(noise["daylight/HA"].sigma_px, 0.0655, 1e-12);
+  EXPECT_EQ(noise["daylight/HA"].recordings, 32);
+  ASSERT_TRUE(noise["daylight/HD"].known);
+  EXPECT_EQ(noise["daylight/HD"].sigma_px, 0.15);
+  EXPECT_EQ(noise["daylight/HD"].recordings, 31);
+  EXPECT_FALSE(noise["sunset/HA"].known);
+  ASSERT_TRUE(noise["sunset/HD"].known);
+  EXPECT_EQ(noise["sunset/HD"].recordings, 8);
+  EXPECT_NEAR(noise["sunset/HD"].sigma_px, 0.25, 1e-12);
+
+  // Grouped by light alone, a group pools both presets: no σ_d (it is a preset's).
+  const std::string w_light = (dir / "light.yaml").string();
+  ASSERT_EQ(Exec("fit_bias", "--cv none --group-by light --in " + table + " --out " + w_light,
+                 dir).code,
+            1);
+  EXPECT_EQ(io::ReadFile(w_light).find("disparity_noise"), std::string::npos);
+}
+
 TEST(FitBiasApp, BadInputsFailCleanlyWithoutOutput) {
   const auto dir = Dir();
   const auto out = dir / "w.yaml";

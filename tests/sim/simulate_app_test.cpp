@@ -209,5 +209,60 @@ TEST(SimulateApp, SensorFromRecordingTakesItsCamera) {
   EXPECT_GT(valid, 0);  // the panel at 4 m is in range
 }
 
+// The panel's temporal disparity noise (sigma_d_px, the estimator the obstacle detector uses at
+// its obstacles: camera/disparity_noise.h) on simulated recordings of the calibrated sensor
+// (config/sensor_calibrated.yaml, daylight: HA σ_d 0.0698 px, HD 0.15 px): panel_extract on the
+// bags recovers each preset's σ_d within 10 % at every distance and angle, the metrics-only path
+// fills the same column, and fit_bias writes the unit's σ_d per group from it.
+TEST(SimulateApp, PanelExtractMeasuresTheSensorsDisparityNoise) {
+  const std::map<std::string, double> sensor_sigma_px = {{"HA", 0.06983629732}, {"HD", 0.15}};
+  const fs::path d = Dir("sigma_d");
+  const fs::path protocol = d / "protocol.yaml";
+  Write(protocol,
+        "protocol: {distances_m: [4, 8, 12, 16], angles_deg: [0, 20], lights: [daylight], "
+        "presets: [HA, HD], emitters: [\"on\"], frames: 10, distance_is: range}\n"
+        "scene: {camera_height_m: 1.0, panel_center_height_m: 1.0}\n");
+  const std::string sim = Bin("simulate") + " --protocol " + protocol.string() + " --sensor " +
+                          DEPTHBIAS_SOURCE_DIR "/config/sensor_calibrated.yaml --seed 5";
+  std::string err;
+  ASSERT_EQ(RunCommand(sim + " --out-dir " + (d / "bags").string(), d, &err), 0) << err;
+  ASSERT_EQ(RunCommand(Bin("panel_extract") + " --jobs 2 --quiet --manifest " +
+                           (d / "bags" / "manifest.csv").string() + " --out " +
+                           (d / "extract.csv").string() + " " + (d / "bags").string(),
+                       d, &err),
+            0)
+      << err;
+  fs::remove_all(d / "bags");
+  ASSERT_EQ(RunCommand(sim + " --metrics-only --out " + (d / "sim.csv").string(), d, &err), 0)
+      << err;
+  for (const char* table : {"extract.csv", "sim.csv"}) {
+    const auto rows = io::ReadMetricsCsv((d / table).string());
+    ASSERT_EQ(rows.size(), 16u) << table;
+    for (const auto& r : rows) {
+      ASSERT_TRUE(r.ok()) << table << " " << r.bag << ": " << r.message;
+      const double truth = sensor_sigma_px.at(r.preset);
+      EXPECT_NEAR(r.sigma_d_px, truth, 0.1 * truth) << table << " " << r.bag;
+      std::printf("%-11s %-4s %4g m %4g deg  sigma_d_px %.4f (sensor %.4f, %+.1f %%)\n", table,
+                  r.preset.c_str(), r.distance_m, r.angle_deg, r.sigma_d_px, truth,
+                  100 * (r.sigma_d_px / truth - 1));
+    }
+  }
+  // fit_bias: the median of each group's recordings, with their number.
+  ASSERT_EQ(RunCommand(Bin("fit_bias") + " --cv none --in " + (d / "extract.csv").string() +
+                           " --out " + (d / "w.yaml").string(),
+                       d, &err),
+            0)
+      << err;
+  const std::string weights = ReadFile(d / "w.yaml");
+  for (const auto& [preset, truth] : sensor_sigma_px) {
+    const size_t group = weights.find("preset: " + preset);
+    ASSERT_NE(group, std::string::npos) << weights;
+    const size_t at = weights.find("disparity_noise: {sigma_px: ", group);
+    ASSERT_NE(at, std::string::npos) << weights;
+    EXPECT_NEAR(std::stod(weights.substr(at + 28)), truth, 0.1 * truth) << preset;
+    EXPECT_NE(weights.find("recordings: 8}", at), std::string::npos) << weights;
+  }
+}
+
 }  // namespace
 }  // namespace depthbias
