@@ -3,6 +3,8 @@
 //   obstacle_detector --weights W.yaml [--light daylight|sunset] [--k 2] [--safe-beyond-raw]
 //                     [--config config/obstacle_detector.yaml] --out detections.jsonl BAG
 // The scenario's preset and emitter come from the bag's recorded options, the light from --light.
+// The margin's disparity noise σ_d: the weights' for that scenario when they hold one, else the
+// recording's own frames', else the config's; the summary line and every JSON line say which.
 // Exit status as every tool: 0 every frame seen, 1 written but some frames blind, 2 nothing
 // written.
 #include <cerrno>
@@ -39,6 +41,9 @@ constexpr char kUsage[] =
     "writes one JSON line per frame: its status (ok, or blind when less than cloud.min_valid_pct\n"
     "of its samples hold a depth: never a clear zone) and for each obstacle the raw and corrected\n"
     "range, sigma, safe range and zone. Preset and emitter come from the bag's options.\n"
+    "The reading noise sigma_d of the margin: the weights' for the scenario (fit_bias writes\n"
+    "it from the panel recordings), else measured on the recording's first frames, else the\n"
+    "config's cluster.disparity_noise_px; said in the summary and every line.\n"
     "Options (default):\n"
     "  --weights FILE     weights YAML of fit_bias (required)\n"
     "  --light L          the scenario's light (daylight)\n"
@@ -66,10 +71,19 @@ struct Fail : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// σ_d of the margin: the recording's own (the temporal spread at the obstacles of its first
+// σ_d of the margin: the unit's, from the weights (the median of its panel recordings' σ_d in
+// this scenario), else the recording's own (the temporal spread at the obstacles of its first
 // frames, lib/detect/noise.h), else the configured one. Says which.
-std::string EstimateNoise(const std::string& bag, const detect::DetectorParams& params,
-                          detect::ObstacleDetector* detector) {
+std::string ChooseNoise(const std::string& bag, const detect::DetectorParams& params,
+                        const records::BiasWeightsGroup& group, const std::string& preset,
+                        detect::ObstacleDetector* detector) {
+  const double weights_px = detect::WeightsDisparityNoisePx(group, preset);
+  if (std::isfinite(weights_px)) {
+    detector->SetDisparityNoisePx(weights_px, detect::NoiseSource::kWeights);
+    return "sigma_d " + records::NumberText(weights_px) + " px from the weights (" + group.light +
+           "/" + group.preset + ", median of " +
+           std::to_string(group.disparity_noise.recordings) + " recordings)";
+  }
   const std::string configured =
       "sigma_d " + records::NumberText(params.cluster.disparity_noise_px) + " px configured";
   if (!params.noise.from_frames) return configured;
@@ -87,7 +101,7 @@ std::string EstimateNoise(const std::string& bag, const detect::DetectorParams& 
   if (measured < params.noise.min_pairs)
     return configured + " (" + pairs + ": too few to measure it)";
   if (!(sigma_px > 0.0)) return configured + " (" + pairs + ": none changed between frames)";
-  detector->SetDisparityNoisePx(sigma_px);
+  detector->SetDisparityNoisePx(sigma_px, detect::NoiseSource::kRecording);
   return "sigma_d " + records::NumberText(sigma_px) + " px from the recording (" + pairs + ")";
 }
 
@@ -171,7 +185,7 @@ int main(int argc, char** argv) {
 
     detect::ObstacleDetector detector(info.depth_intrinsics, params, *scenario);
     const auto start = std::chrono::steady_clock::now();
-    const std::string noise = EstimateNoise(bag, params, &detector);
+    const std::string noise = ChooseNoise(bag, params, scenario->group(), preset, &detector);
     std::string lines;
     records::DepthFrame frame;
     for (; reader.Next(&frame); ++n) {

@@ -57,10 +57,11 @@ ObstacleDetector::ObstacleDetector(const camera::Intrinsics& intrinsics,
 
 ObstacleDetector::~ObstacleDetector() = default;
 
-void ObstacleDetector::SetDisparityNoisePx(double sigma_px) {
+void ObstacleDetector::SetDisparityNoisePx(double sigma_px, NoiseSource source) {
   if (!(sigma_px > 0.0) || !std::isfinite(sigma_px))
     throw std::invalid_argument("disparity noise must be > 0 px");
   sigma_d_px_ = sigma_px;
+  sigma_d_from_ = source;
 }
 
 const TemporalNoise& ObstacleDetector::temporal_noise() const { return impl_->temporal; }
@@ -85,6 +86,7 @@ FrameDetections ObstacleDetector::Detect(const records::DepthFrame& frame, std::
   }
   out.success = true;
   out.disparity_noise_px = sigma_d_px_;
+  out.disparity_noise_from = sigma_d_from_;
   const double fb = m.intrinsics.fx * p.baseline_m;  // f·B [px·m]
 
   // 1. Cloud, and whether the frame shows enough to say anything is clear.

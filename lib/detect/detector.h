@@ -61,6 +61,7 @@ struct FrameDetections {
   Zone zone = Zone::kClear;
   std::vector<DetectedObstacle> obstacles;  // nearest first
   double disparity_noise_px = 0.0; // σ_d of this frame's margin (the reading's noise)
+  NoiseSource disparity_noise_from = NoiseSource::kConfig;  // where that σ_d came from
   // Diagnostics.
   int samples = 0;                 // sampled pixels (one per stride block)
   int cloud_points = 0;
@@ -88,9 +89,11 @@ class ObstacleDetector {
   const DetectorParams& params() const { return params_; }
 
   // σ_d of the margin's reading noise [px]: cluster.disparity_noise_px until set (the app sets
-  // the recording's own, noise.h). Throws std::invalid_argument unless finite and > 0.
-  void SetDisparityNoisePx(double sigma_px);
+  // the weights' or the recording's own, noise.h), and where it came from. Throws
+  // std::invalid_argument unless finite and > 0.
+  void SetDisparityNoisePx(double sigma_px, NoiseSource source = NoiseSource::kRecording);
   double disparity_noise_px() const { return sigma_d_px_; }
+  NoiseSource disparity_noise_from() const { return sigma_d_from_; }
   // The temporal spread at the obstacles of consecutive frames seen so far (frames whose
   // indices follow each other), and a fresh start.
   const TemporalNoise& temporal_noise() const;
@@ -100,6 +103,7 @@ class ObstacleDetector {
   struct Impl;
   DetectorParams params_;
   double sigma_d_px_ = 0.0;
+  NoiseSource sigma_d_from_ = NoiseSource::kConfig;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -12,7 +12,8 @@ std::string FormatJsonLine(const FrameDetections& d, bool safe_beyond_raw) {
       .String("status", d.blind ? "blind" : "ok")
       .Number("valid_pct", d.valid_pct)
       .String("zone", ZoneName(d.zone))
-      .Number("disparity_noise_px", d.disparity_noise_px);
+      .Number("disparity_noise_px", d.disparity_noise_px)
+      .String("disparity_noise_from", NoiseSourceName(d.disparity_noise_from));
   if (safe_beyond_raw) w.Bool("safe_beyond_raw", true);
   w.BeginArray("obstacles");
   for (const DetectedObstacle& o : d.obstacles) {

@@ -1,5 +1,8 @@
 #include "detect/noise.h"
 
+#include <cmath>
+#include <limits>
+
 namespace depthbias::detect {
 
 bool NoiseParams::IsValid(std::string* why) const {
@@ -12,6 +15,23 @@ bool NoiseParams::IsValid(std::string* why) const {
     return false;
   }
   return true;
+}
+
+std::string NoiseSourceName(NoiseSource source) {
+  switch (source) {
+    case NoiseSource::kConfig: return "config";
+    case NoiseSource::kRecording: return "recording";
+    case NoiseSource::kWeights: return "weights";
+  }
+  return "config";
+}
+
+double WeightsDisparityNoisePx(const records::BiasWeightsGroup& group,
+                               const std::string& preset) {
+  const records::BiasDisparityNoise& n = group.disparity_noise;
+  if (!n.known || group.preset != preset || !(n.sigma_px > 0) || !std::isfinite(n.sigma_px))
+    return std::numeric_limits<double>::quiet_NaN();
+  return n.sigma_px;
 }
 
 }  // namespace depthbias::detect

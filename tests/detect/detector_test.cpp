@@ -275,6 +275,37 @@ TEST(ObstacleDetector, TemporalSpreadAtTheObstaclesGivesTheUnitsDisparityNoise) 
   }
 }
 
+// The weights' σ_d is a preset's: a group gives it to a recording of its own preset only (a
+// group pooling presets, "*", gives none). The source goes with the value into every line.
+TEST(ObstacleDetector, TheWeightsSigmaIsTheRecordingsPresetsOnly) {
+  records::BiasWeightsGroup g;
+  g.light = "daylight";
+  g.preset = "HD";
+  EXPECT_TRUE(std::isnan(WeightsDisparityNoisePx(g, "HD")));  // the weights do not say
+  g.disparity_noise = {true, 0.15, 16};
+  EXPECT_EQ(WeightsDisparityNoisePx(g, "HD"), 0.15);
+  EXPECT_TRUE(std::isnan(WeightsDisparityNoisePx(g, "HA")));
+  g.preset = "*";
+  EXPECT_TRUE(std::isnan(WeightsDisparityNoisePx(g, "HD")));
+
+  const model::BiasModel bias(testing::Weights(0.0, 1.0));
+  auto p = testing::Scene({Person(5, -10)});
+  ObstacleDetector detector(p.sensor.intrinsics, DetectorParams{},
+                            bias.Scenario("daylight", "HD"));
+  const auto frames = testing::Render(p, 1);
+  FrameDetections d = detector.Detect(frames[0], 0);
+  EXPECT_EQ(d.disparity_noise_from, NoiseSource::kConfig);
+  EXPECT_NE(FormatJsonLine(d).find("\"disparity_noise_px\": 0.08, \"disparity_noise_from\": "
+                                   "\"config\""),
+            std::string::npos)
+      << FormatJsonLine(d);
+  detector.SetDisparityNoisePx(0.15, NoiseSource::kWeights);
+  d = detector.Detect(frames[0], 1);
+  EXPECT_EQ(d.disparity_noise_px, 0.15);
+  EXPECT_NE(FormatJsonLine(d).find("\"disparity_noise_from\": \"weights\""), std::string::npos);
+  EXPECT_EQ(NoiseSourceName(NoiseSource::kRecording), "recording");
+}
+
 TEST(Zones, StoppingDistanceAndZones) {
   ZoneParams z;
   z.speed_mps = 3.0;

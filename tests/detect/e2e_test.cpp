@@ -2,9 +2,9 @@
 // config/sensor_calibrated.yaml: High Accuracy σ_d = 0.07 px with 71 % holes, High Density
 // σ_d = 0.15 px) with a disparity offset of −0.2 px (far targets read farther: the dangerous
 // direction) is calibrated on the panel protocol in both presets (simulate → bags →
-// panel_extract → fit_bias); then obstacle_detector runs on that unit's recordings of people
-// standing from 3.5 to 15 m, ±32° off-axis, beside bushes and before a hedge, 60 frames per
-// preset. Per preset and per range, never pooled: every person is found in ≥ 95 % of frames;
+// panel_extract → fit_bias, which writes each preset's σ_d from the panel recordings); then
+// obstacle_detector runs on that unit's recordings of people standing from 3.5 to 15 m, ±32°
+// off-axis, beside bushes and before a hedge, 60 frames per preset. Per preset and per range, never pooled: every person is found in ≥ 95 % of frames;
 // beyond 7 m the corrected range is closer to the truth than the raw one; the safe range
 // (min(raw, corrected − 2σ)) lies beyond the truth in at most 2.5 % of the frames (1 of 60).
 #include <gtest/gtest.h>
@@ -127,6 +127,10 @@ TEST(ObstacleDetectorApp, CalibratedUnitCoveragePerRangeAndPreset) {
   for (const auto& g : weights.groups) {
     ASSERT_TRUE(g.margin.known) << g.preset;
     EXPECT_NEAR(g.values[0], -0.2, 0.05) << g.preset << ": delta_px recovered from the bags";
+    ASSERT_TRUE(g.disparity_noise.known) << g.preset << ": σ_d of the panel recordings";
+    EXPECT_EQ(g.disparity_noise.recordings, 16) << g.preset;
+    std::printf("weights %s/%s: sigma_d %.4f px (median of %d recordings)\n", g.light.c_str(),
+                g.preset.c_str(), g.disparity_noise.sigma_px, g.disparity_noise.recordings);
   }
 
   // 2. The same unit's obstacle recordings, one per preset.
@@ -162,7 +166,11 @@ TEST(ObstacleDetectorApp, CalibratedUnitCoveragePerRangeAndPreset) {
               0)
         << err;
     EXPECT_NE(err.find("daylight/" + preset), std::string::npos) << err;
-    EXPECT_NE(err.find("from the recording"), std::string::npos) << err;  // σ_d: the unit's
+    // σ_d: the unit's, from its weights (fit_bias: the median of the 16 panel recordings of
+    // this preset, measured by panel_extract), not from this recording's frames.
+    EXPECT_NE(err.find("px from the weights (daylight/" + preset + ", median of 16 recordings)"),
+              std::string::npos)
+        << err;
     double sensor_sigma_px = 0;  // the simulated unit's σ_d in this preset
     for (const YAML::Node& sc : YAML::LoadFile(kSensor)["sensor"]["scenarios"])
       if (sc["light"].as<std::string>() == "daylight" && sc["preset"].as<std::string>() == preset)
@@ -179,9 +187,10 @@ TEST(ObstacleDetectorApp, CalibratedUnitCoveragePerRangeAndPreset) {
       double raw_error = 0, corrected_error = 0, sigma = 0;
       for (const YAML::Node& f : frames) {
         EXPECT_EQ(f["status"].as<std::string>(), "ok");
-        // The margin's σ_d is this preset's (measured on the frames), not one global 0.08 px.
+        // The margin's σ_d is this preset's (the unit's weights), not one global 0.08 px.
         EXPECT_NEAR(f["disparity_noise_px"].as<double>(), sensor_sigma_px, 0.1 * sensor_sigma_px)
             << preset;
+        EXPECT_EQ(f["disparity_noise_from"].as<std::string>(), "weights") << preset;
         YAML::Node best;  // a handle to the matched obstacle (null: none)
         double best_gap = 0.6;  // lateral distance to the truth's direction [m]
         for (const YAML::Node& o : f["obstacles"]) {
