@@ -175,8 +175,12 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         int count = 0;
         for (const auto& f : r.nested.folds)
           count += std::count(f.selected.begin(), f.selected.end(), r.steps[i].effect) ? 1 : 0;
-        const bool earns =
-            r.nested.gain > 0 && 2 * count >= static_cast<int>(r.nested.folds.size());
+        // The folds' selections must earn on their held-out cells both as the fits predict
+        // them and as the simulator reproduces them.
+        const bool simulated_earns =
+            std::isnan(r.nested.gain_simulated) || r.nested.gain_simulated > 0;
+        const bool earns = r.nested.gain > 0 && simulated_earns &&
+                           2 * count >= static_cast<int>(r.nested.folds.size());
         if (earns) {
           kept.push_back(current.terms[i].term);
           start.terms.push_back(current.terms[i]);
@@ -185,7 +189,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           r.dropped.push_back(r.steps[i].effect + " (selected in " + std::to_string(count) +
                               " of " + std::to_string(r.nested.folds.size()) +
                               " outer folds; the folds' selections gain " + Num(r.nested.gain) +
-                              " held out)");
+                              " held out" +
+                              (std::isnan(r.nested.gain_simulated)
+                                   ? std::string()
+                                   : ", " + Num(r.nested.gain_simulated) + " simulated") +
+                              ")");
         }
       }
       if (steps.size() != r.steps.size()) {

@@ -119,10 +119,15 @@ struct Nested {
   std::vector<NestedFold> folds;
   std::vector<char> cells;             // held out in some fold
   std::vector<double> z_baseline, z_calibrated, z_selected, z_simulated;  // [obs], fold units
-  GapStat baseline, calibrated, selected, simulated;
+  std::vector<double> z_simulated_calibrated;  // the fold's calibrated base simulated [obs]
+  GapStat baseline, calibrated, selected, simulated, simulated_calibrated;
   double shrink_heldout_nested_pct = NAN;  // baseline → selection added, held out
   double shrink_simulated_pct = NAN;       // baseline → selection simulated, held out
   double gain = 0;                     // Σ folds' calibrated − selected held-out deviance
+  // Σz² of the held-out cells simulated with each fold's calibrated base minus simulated with
+  // its selection added: what the selections earn where the simulator, not the fits'
+  // interpolation, makes the prediction (NaN when not simulated).
+  double gain_simulated = NAN;
 };
 
 // Effects that cannot be told apart on this table: one of them, with the size each would need.

@@ -55,7 +55,7 @@ namespace {
 struct FoldRun {
   NestedFold fold;
   std::vector<char> held;
-  std::vector<double> zb, z0, z1, zs;
+  std::vector<double> zb, z0, z1, zs, zsc;
   bool ok = true;
   std::string message;
 };
@@ -92,20 +92,27 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
     out.z0 = Scaled(model, mu0);
     out.z1 = Scaled(model, mu1);
     out.zs.assign(obs, NAN);
+    out.zsc.assign(obs, NAN);
     try {
       const Design sub = Subset(d, out.held);
       SimulateOptions options = params.simulate;
       options.threads = 1;  // the folds run side by side
-      const std::vector<double> v = SimulateValues(
-          SelectedParams(sims, base, sel.current, d.num_scenarios()), sub, options);
-      std::vector<double> mu(obs, NAN);
-      int i = 0;
-      for (int c = 0; c < d.num_cells(); ++c) {
-        if (!out.held[c]) continue;
-        for (int k = 0; k < kk; ++k)
-          mu[static_cast<size_t>(c) * kk + k] = v[static_cast<size_t>(i) * kk + k];
-        ++i;
-      }
+      // The held-out cells simulated with the fold's calibrated base, and with its selection.
+      auto simulate = [&](const ModelFit& fit) {
+        const std::vector<double> v = SimulateValues(
+            SelectedParams(sims, base, fit, d.num_scenarios()), sub, options);
+        std::vector<double> mu(obs, NAN);
+        int i = 0;
+        for (int c = 0; c < d.num_cells(); ++c) {
+          if (!out.held[c]) continue;
+          for (int k = 0; k < kk; ++k)
+            mu[static_cast<size_t>(c) * kk + k] = v[static_cast<size_t>(i) * kk + k];
+          ++i;
+        }
+        return mu;
+      };
+      const std::vector<double> mu = simulate(sel.current);
+      out.zsc = sel.steps.empty() ? Scaled(model, mu) : Scaled(model, simulate(sel.m0));
       out.zs = Scaled(model, mu);
       nf.simulated = true;
     } catch (const std::exception& e) {
@@ -127,7 +134,8 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   const int kk = d.num_metrics();
   const size_t obs = d.real.size();
   n.cells.assign(d.num_cells(), 0);
-  for (auto* z : {&n.z_baseline, &n.z_calibrated, &n.z_selected, &n.z_simulated})
+  for (auto* z : {&n.z_baseline, &n.z_calibrated, &n.z_selected, &n.z_simulated,
+                  &n.z_simulated_calibrated})
     z->assign(obs, NAN);
   // The folds side by side, as many at once as the simulation may use threads.
   std::vector<FoldRun> runs(num_folds);
@@ -162,6 +170,7 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
         n.z_calibrated[o] = run.z0[o];
         n.z_selected[o] = run.z1[o];
         n.z_simulated[o] = run.zs[o];
+        n.z_simulated_calibrated[o] = run.zsc[o];
       }
     }
     n.folds.push_back(std::move(run.fold));
@@ -173,6 +182,12 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   if (all_simulated) {
     n.simulated = Stat(full, n.z_simulated, n.cells);
     n.shrink_simulated_pct = Shrink(n.baseline, n.simulated);
+    n.simulated_calibrated = Stat(full, n.z_simulated_calibrated, n.cells);
+    n.gain_simulated = 0;
+    for (size_t o = 0; o < obs; ++o) {
+      const double a = n.z_simulated_calibrated[o], b = n.z_simulated[o];
+      if (std::isfinite(a) && std::isfinite(b)) n.gain_simulated += a * a - b * b;
+    }
   }
   n.run = true;
   return n;

@@ -145,9 +145,13 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
   GapJsonStat(w, "baseline", r, n.baseline);
   GapJsonStat(w, "calibrated", r, n.calibrated);
   GapJsonStat(w, "selected", r, n.selected);
-  if (std::isfinite(n.shrink_simulated_pct)) GapJsonStat(w, "simulated", r, n.simulated);
-  else w.Null("simulated");
-  w.Number("gain", n.gain).EndObject();
+  if (std::isfinite(n.shrink_simulated_pct)) {
+    GapJsonStat(w, "simulated", r, n.simulated);
+    GapJsonStat(w, "simulated_calibrated", r, n.simulated_calibrated);
+  } else {
+    w.Null("simulated").Null("simulated_calibrated");
+  }
+  w.Number("gain", n.gain).Number("gain_simulated", n.gain_simulated).EndObject();
 }
 
 void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
