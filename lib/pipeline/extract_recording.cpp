@@ -23,6 +23,7 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
   camera::Intrinsics in;
   std::string disagree;  // where the manifest and the recording differ
   std::string settings;  // where preset and emitter came from
+  std::string damage_note;  // the recording was cut short
   try {
     const io::ManifestRow* truth = manifest ? manifest->Find(path) : nullptr;
     if (manifest && !truth) throw std::runtime_error("not listed in " + manifest->file());
@@ -68,6 +69,11 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
       used.baseline_m = baseline->second / 1000.0;
     panel::PrefetchSource ahead(source.get(), 8);  // read on one core, measure on the other
     r = panel::ExtractPanel(ahead, in, used, window, box);
+    // A recording cut short (a bare MCAP file whose writer stopped, a ROS 1 bag read with
+    // allow_partial) gives its frames up to the damage; its row says so.
+    if (!source->damage().empty())
+      damage_note = path + ": read up to where it stops being readable (" +
+                        source->damage() + ")";
     const records::PanelMetrics known = m;  // what the manifest and the bag say
     m = r.metrics;
     m.bag = known.bag;
@@ -86,6 +92,8 @@ RecordingResult ExtractRecording(const std::string& path, const panel::PanelPara
     const std::string note = manifest->file() + ": " + disagree;
     m.message = m.message.empty() ? note : m.message + "; " + note;
   }
+  if (!damage_note.empty())
+    m.message = m.message.empty() ? damage_note : m.message + "; " + damage_note;
   r.metrics = m;
   out.detection_json = panel::DetectionJson(
       r, in, "\"bag\": \"" + name + "\", \"settings_from\": \"" +

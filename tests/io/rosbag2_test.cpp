@@ -154,6 +154,27 @@ TEST(Rosbag2, PanelExtractGivesTheSameRowForEveryForm) {
             std::string::npos);
 }
 
+// A recording cut short gives its frames up to the cut, and its metrics row says so: a row from
+// a crashed recording never reads as a whole one.
+TEST(Rosbag2, PanelExtractRowOfACutShortRecordingSaysWhereItStops) {
+  const std::filesystem::path out =
+      std::filesystem::path(DEPTHBIAS_BINARY_DIR) / "test_tmp" / "rosbag2_cut_row";
+  std::filesystem::create_directories(out);
+  const std::string cut = kDir + "/bad/cut.mcap";
+  const test_support::ToolRun run = test_support::RunShell(
+      test_support::Bin("panel_extract") + " --quiet --out " + (out / "metrics.csv").string() +
+          " " + cut + " " + kDir + "/ros1.bag",
+      out);
+  ASSERT_LE(run.code, 1) << run.err;
+  const CsvTable table = ReadCsv((out / "metrics.csv").string());
+  ASSERT_EQ(table.rows.size(), 2u);
+  const int message = table.RequireColumn("message");
+  EXPECT_NE(table.rows[0][message].find(cut + ": read up to where it stops being readable ("),
+            std::string::npos)
+      << table.rows[0][message];
+  EXPECT_EQ(table.rows[1][message].find("stops being readable"), std::string::npos);
+}
+
 TEST(Rosbag2, BagInfoReadsLikeRos2BagInfo) {
   const std::filesystem::path out =
       std::filesystem::path(DEPTHBIAS_BINARY_DIR) / "test_tmp" / "rosbag2_info";
