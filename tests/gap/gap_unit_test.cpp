@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <random>
 
@@ -218,6 +219,77 @@ TEST(Placement, RemlFindsTheScatterLawAndFlagsTheMisplacedPoint) {
   }
   EXPECT_TRUE(found);
   EXPECT_LE(flagged, 2);
+}
+
+// A user's unit: one light, one preset, 16 test points × emitter off/on (32 rows), every test
+// point shifted by a draw of τ = 2 % of D. Distance × angle would give every test point a fixed
+// effect of its own and leave the scatter nothing to be estimated from (REML then ran off to
+// 6 m at every distance on such a unit); it is left out there. A misplaced point spills a
+// quarter of its departure into its row's and its column's effects and inflates the law, so it
+// is also judged left out of the fit.
+PlacementEstimate UnitPlacement(std::uint32_t seed, bool misplaced) {
+  std::vector<records::PanelMetrics> rows;
+  for (double a : {0.0, 10.0, 20.0, 35.0})
+    for (double dist : {4.0, 8.0, 12.0, 16.0})
+      for (const char* emitter : {"off", "on"})
+        rows.push_back(Row(dist, a, "HA", emitter, "daylight"));
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::map<std::string, double> shift;
+  for (auto& r : rows) {
+    const std::string key = std::to_string(r.distance_m) + std::to_string(r.angle_deg);
+    if (!shift.count(key)) shift[key] = 0.02 * r.distance_m * unit(rng);
+    if (misplaced && r.distance_m == 8 && r.angle_deg == 10) shift[key] = 2.0;
+    r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
+  }
+  Design d;
+  std::string why;
+  if (!BuildDesign(rows, &d, &why)) throw std::runtime_error(why);
+  Simulations s;
+  s.metrics = d.metrics;
+  s.base.assign(d.real.size(), 0.0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    s.depth_m.push_back(d.cells[c].distance_m);
+    for (int k = 1; k < d.num_metrics(); ++k)
+      s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
+  }
+  const NoiseEstimate n = EstimateNoise(d, s);
+  return EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
+}
+
+TEST(Placement, AUnitOfOneLightAndOnePresetStillEstimatesTheScatter) {
+  const PlacementEstimate pe = UnitPlacement(20261124, true);
+  ASSERT_EQ(pe.num_points, 16);
+  const double law16 = pe.Law(0, kMedianBias, 16);
+  EXPECT_GT(law16, 0.5 * 0.32) << pe.a[0] << " + " << pe.b[0] << "·D";
+  EXPECT_LT(law16, 2.0 * 0.32) << pe.a[0] << " + " << pe.b[0] << "·D";
+  int flagged = 0;
+  for (int t = 0; t < pe.num_points; ++t) {
+    if (!pe.flagged[0][t]) continue;
+    ++flagged;
+    EXPECT_EQ(pe.point_distance_m[t], 8);
+    EXPECT_EQ(pe.point_angle_deg[t], 10);
+    EXPECT_GT(pe.departure[0][t], 1.0);
+  }
+  EXPECT_EQ(flagged, 1);
+}
+
+// The same units without a misplaced point, 20 seeds: the test at p < 0.05 / 16 flags a point in
+// few of them (at most 3 of 20), and the law stays within a factor of two at 16 m in most.
+TEST(Placement, AUnitWithoutAMisplacedPointIsRarelyFlagged) {
+  int tables_flagged = 0, law_ok = 0;
+  for (std::uint32_t seed = 1; seed <= 20; ++seed) {
+    const PlacementEstimate pe = UnitPlacement(seed, false);
+    int f = 0;
+    for (int t = 0; t < pe.num_points; ++t) f += pe.flagged[0][t];
+    tables_flagged += f > 0;
+    const double law16 = pe.Law(0, kMedianBias, 16);
+    law_ok += law16 > 0.16 && law16 < 0.64;
+  }
+  std::printf("unit without a misplaced point: a point flagged in %d of 20 tables, the law at 16 m "
+              "within a factor of two in %d of 20\n", tables_flagged, law_ok);
+  EXPECT_LE(tables_flagged, 3);
+  EXPECT_GE(law_ok, 16);
 }
 
 TEST(Localize, AGapAlongOneFactorIsThatFactors) {
