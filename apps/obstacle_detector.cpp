@@ -40,13 +40,17 @@ constexpr char kUsage[] =
     "Finds obstacles in every depth frame (voxel grid, RANSAC ground, Euclidean clusters) and\n"
     "writes one JSON line per frame: its status (ok, or blind when less than cloud.min_valid_pct\n"
     "of its samples hold a depth: never a clear zone) and for each obstacle the raw and corrected\n"
-    "range, sigma, safe range and zone. Preset and emitter come from the bag's options.\n"
+    "range, sigma, safe range and zone. Preset and emitter come from the recording (a ROS 1\n"
+    "bag's options, a ROS 2 recording's parameter messages), else from --preset and --emitter.\n"
     "The reading noise sigma_d of the margin: the weights' for the scenario (fit_bias writes\n"
     "it from the panel recordings), else measured on the recording's first frames, else the\n"
     "config's cluster.disparity_noise_px; said in the summary and every line.\n"
     "Options (default):\n"
     "  --weights FILE     weights YAML of fit_bias (required)\n"
     "  --light L          the scenario's light (daylight)\n"
+    "  --preset P         the preset (HA, HD, ...) when the recording does not hold it; one\n"
+    "                     that differs from the recording's is refused (the recording's)\n"
+    "  --emitter on|off   the emitter likewise (the recording's)\n"
     "  --k K              standard deviations of the margin, in (0, 10] (2, or the config's)\n"
     "  --safe-beyond-raw  safe range = corrected - k sigma even beyond the raw range (off: the\n"
     "                     safe range is min(raw, corrected - k sigma)); said in every line\n"
@@ -116,7 +120,8 @@ int main(int argc, char** argv) {
   apps::KeepLargeBlocksForReuse();
   io::PrepareRosEnvironment();
   io::InstallSignalCleanup();
-  std::string weights_path, light = "daylight", config_path, out, bag;
+  std::string weights_path, light = "daylight", config_path, out, bag, given_preset,
+      given_emitter;
   double k = -1.0;
   bool safe_beyond_raw = false;
   std::uint64_t n = 0, blind = 0, obstacles = 0;
@@ -126,6 +131,8 @@ int main(int argc, char** argv) {
       if (args.IsHelp()) return apps::PrintHelp(kUsage);
       if (a == "--weights") weights_path = args.Value();
       else if (a == "--light") light = args.Value();
+      else if (a == "--preset") given_preset = args.Value();
+      else if (a == "--emitter") given_emitter = args.Value();
       else if (a == "--k") k = ParseK(args.Value());
       else if (a == "--safe-beyond-raw") safe_beyond_raw = true;
       else if (a == "--config") config_path = args.Value();
@@ -137,6 +144,11 @@ int main(int argc, char** argv) {
     }
     if (weights_path.empty() || out.empty() || bag.empty())
       throw Fail("usage: obstacle_detector --weights W.yaml --out detections.jsonl BAG");
+    double given_preset_value = 0;
+    if (!given_preset.empty() && !camera::PresetOptionValue(given_preset, &given_preset_value))
+      throw Fail("--preset '" + given_preset + "' is not a D455 preset (HA, HD, ...)");
+    if (!given_emitter.empty() && given_emitter != "on" && given_emitter != "off")
+      throw Fail("--emitter '" + given_emitter + "' is neither on nor off");
     io::CheckOutputs({out}, {weights_path, config_path, bag});
     io::CheckOutputFile(out);
 
@@ -161,14 +173,32 @@ int main(int argc, char** argv) {
     io::RecordingSource& reader = *recording;
     const io::BagInfo& info = reader.info();
     if (!info.has_depth_intrinsics) throw Fail(bag + ": no camera_info for the depth stream");
-    const auto option = [&](const char* name) {
-      const auto it = info.options.find(name);
-      if (it == info.options.end())
-        throw Fail(bag + ": no recorded option " + name + " (the scenario's preset and emitter)");
-      return it->second;
+    // The recording's word, else the user's; both given and different: refused.
+    const auto setting = [&](const char* name, const char* flag, const std::string& given,
+                             const std::string& recorded_text, bool recorded) {
+      if (!recorded && given.empty())
+        throw Fail(bag + ": no recorded " + name + " (" + reader.format_name() +
+                   " without it): give " + flag);
+      if (recorded && !given.empty() && given != recorded_text)
+        throw Fail(bag + ": " + flag + " " + given + " differs from the recording's " + name +
+                   " " + recorded_text);
+      return recorded ? recorded_text : given;
     };
-    const std::string preset = camera::PresetName(option("Visual_Preset"));
-    const std::string emitter = option("Emitter_Enabled") != 0 ? "on" : "off";
+    const auto vp = info.options.find("Visual_Preset");
+    const auto ee = info.options.find("Emitter_Enabled");
+    const std::string preset =
+        setting("preset (Visual_Preset)", "--preset", given_preset,
+                vp != info.options.end() ? camera::PresetName(vp->second) : "",
+                vp != info.options.end());
+    const std::string emitter =
+        setting("emitter (Emitter_Enabled)", "--emitter", given_emitter,
+                ee != info.options.end() ? (ee->second != 0 ? "on" : "off") : "",
+                ee != info.options.end());
+    const std::string settings_from =
+        vp != info.options.end() && ee != info.options.end() ? reader.settings_source()
+        : vp == info.options.end() && ee == info.options.end()
+            ? "--preset and --emitter"
+            : reader.settings_source() + " and the command line";
     const auto b = info.options.find("Stereo_Baseline");
     if (b != info.options.end() && b->second > 0)
       params.baseline_m = b->second / 1000.0;  // recorded in millimetres
@@ -199,11 +229,11 @@ int main(int argc, char** argv) {
     const double s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     // "20 frames: 18 ok, 2 blind; 34 obstacles (daylight/HD/emitter on, ...) → out"
-    std::printf("obstacle_detector: %s; %llu obstacles (%s/%s/emitter %s, k %g%s, %s, "
+    std::printf("obstacle_detector: %s; %llu obstacles (%s/%s/emitter %s from %s, k %g%s, %s, "
                 "stopping distance %.2f m), %.1f frames/s \u2192 %s\n",
                 apps::Summary(n, "frame", {{"ok", n - blind}, {"blind", blind}}, "").c_str(),
                 static_cast<unsigned long long>(obstacles), light.c_str(), preset.c_str(),
-                emitter.c_str(), params.k,
+                emitter.c_str(), settings_from.c_str(), params.k,
                 params.safe_beyond_raw ? ", safe range beyond the raw one allowed" : "",
                 noise.c_str(), params.zones.StoppingDistanceM(), s > 0 ? n / s : 0.0, out.c_str());
   } catch (const std::exception& e) {

@@ -287,7 +287,8 @@ void Rosbag2Source::Open() {
   if (settings_.empty())
     r2_.missing.push_back("preset and emitter (no " + std::string(ros2::kParameterEventType) +
                           " with depth_module parameters): give the manifest's preset and "
-                          "emitter columns");
+                          "emitter columns (panel_extract), or --preset and --emitter "
+                          "(obstacle_detector)");
 }
 
 }  // namespace

@@ -52,7 +52,7 @@ std::string Quote(const std::string& s) {
 }
 
 std::string Settings(const BagInfo& info, const std::string& source) {
-  if (source.empty()) return "not recorded (from the manifest's preset and emitter columns)";
+  if (source.empty()) return "not recorded (give them: the manifest's preset and emitter columns, or obstacle_detector's --preset and --emitter)";
   std::string s;
   const auto p = info.options.find("Visual_Preset");
   const auto e = info.options.find("Emitter_Enabled");

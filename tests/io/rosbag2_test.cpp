@@ -175,6 +175,44 @@ TEST(Rosbag2, PanelExtractRowOfACutShortRecordingSaysWhereItStops) {
   EXPECT_EQ(table.rows[1][message].find("stops being readable"), std::string::npos);
 }
 
+// obstacle_detector on ROS 2 recordings: the preset and emitter from the recorded parameters,
+// else from --preset and --emitter; without either, or against the recording, refused in one
+// line naming the recording.
+TEST(Rosbag2, ObstacleDetectorTakesPresetAndEmitterFromTheRecordingElseTheCommandLine) {
+  const std::filesystem::path out =
+      std::filesystem::path(DEPTHBIAS_BINARY_DIR) / "test_tmp" / "rosbag2_detector";
+  std::filesystem::remove_all(out);
+  std::filesystem::create_directories(out);
+  const std::string weights = (out / "w.yaml").string();
+  ASSERT_EQ(test_support::RunShell(test_support::Bin("fit_bias") + " --in " DEPTHBIAS_SOURCE_DIR
+                                   "/config/data/paper_d455_outdoor.csv --cv none --out " +
+                                   weights, out).code, 0);
+  const std::string detector = test_support::Bin("obstacle_detector") + " --weights " + weights +
+                               " --out " + (out / "d.jsonl").string() + " ";
+  const std::string bare = kDir + "/mcap_zstd.mcap";           // no parameter messages
+  const std::string with = kDir + "/rosbags_mcap";             // HA, emitter on recorded
+  test_support::ToolRun run = test_support::RunShell(detector + bare, out);
+  EXPECT_EQ(run.code, 2);
+  EXPECT_EQ(run.err, "obstacle_detector: " + bare + ": no recorded preset (Visual_Preset) "
+                     "(rosbag2 MCAP file without it): give --preset\n");
+  EXPECT_FALSE(std::filesystem::exists(out / "d.jsonl"));
+  run = test_support::RunShell(detector + "--preset HD --emitter off " + bare, out);
+  EXPECT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("daylight/HD/emitter off from --preset and --emitter"),
+            std::string::npos) << run.out;
+  run = test_support::RunShell(detector + with, out);
+  EXPECT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.out.find("daylight/HA/emitter on from parameter messages"), std::string::npos)
+      << run.out;
+  run = test_support::RunShell(detector + "--preset HD " + with, out);
+  EXPECT_EQ(run.code, 2);
+  EXPECT_EQ(run.err, "obstacle_detector: " + with + ": --preset HD differs from the recording's "
+                     "preset (Visual_Preset) HA\n");
+  run = test_support::RunShell(detector + "--emitter maybe " + bare, out);
+  EXPECT_EQ(run.code, 2);
+  EXPECT_NE(run.err.find("--emitter 'maybe' is neither on nor off"), std::string::npos);
+}
+
 TEST(Rosbag2, BagInfoReadsLikeRos2BagInfo) {
   const std::filesystem::path out =
       std::filesystem::path(DEPTHBIAS_BINARY_DIR) / "test_tmp" / "rosbag2_info";
