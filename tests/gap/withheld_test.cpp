@@ -112,6 +112,49 @@ TEST(Criteria, EachWrongAnswerFails) {
                   .pass);
 }
 
+// A gain on σ_d is the calibration's own direction where every scenario's σ_d is calibrated: it
+// is answered by naming it "one of" with the calibration and the size it would need, never by
+// a selection. The wrong size, an ambiguity with another effect instead of the calibration, and
+// a selection beside it all fail.
+TEST(Criteria, AnEffectAliasedWithTheCalibrationIsAnsweredByNamingIt) {
+  WithheldCase gain;
+  gain.name = "noise gain";
+  gain.injected = {{"disparity_noise_gain", {{"gain", 1.3}}, ""}};
+  const std::string calibration =
+      ",\n  \"calibration\": {\"scenarios\": [{\"scenario\": \"daylight/HA\"}, "
+      "{\"scenario\": \"sunset/HA\"}]}";
+  auto json = [&](const std::string& selected, const std::string& one_of,
+                  const std::string& sizes) {
+    std::string j = Json(selected, "\"shrink_simulated_pct\": 85");
+    j.insert(j.rfind('}'), calibration + ",\n  \"ambiguous\": [{\"one_of\": [" + one_of +
+                               "], \"sizes\": [" + sizes + "], \"correlation\": 0.99}]");
+    return j;
+  };
+  const std::string right_one_of = "\"disparity_noise_gain\", \"calibration:sigma_d\"";
+  const CaseOutcome ok =
+      JudgeCase(json("", right_one_of, "\"gain 1.27 / 1.33\", \"sigma_d_px 0.09 / 0.05\""),
+                gain, Rows());
+  EXPECT_TRUE(ok.pass) << ok.why;
+  EXPECT_TRUE(JudgeCase(json("", right_one_of, "\"gain 1.31\", \"sigma_d_px 0.09\""), gain,
+                        Rows())
+                  .pass);
+  EXPECT_FALSE(JudgeCase(json("", right_one_of, "\"gain 1.27 / 1.45\", \"sigma_d_px 0.09\""),
+                         gain, Rows())
+                   .pass)
+      << "a scenario's size 50 % off";
+  EXPECT_FALSE(JudgeCase(json("", "\"disparity_noise_gain\", \"temporal_drift\"",
+                              "\"gain 1.3\", \"rate_px_per_s 0.1\""),
+                         gain, Rows())
+                   .pass)
+      << "one of with another effect, not the calibration";
+  EXPECT_FALSE(
+      JudgeCase(json("{\"name\": \"panel_tilt\", \"params\": {\"yaw_deg\": 3}}",
+                     right_one_of, "\"gain 1.3\", \"sigma_d_px 0.09\""),
+                gain, Rows())
+          .pass)
+      << "an effect selected beside it";
+}
+
 TEST(Criteria, OutsideTheRegistryUnexplainedMustNameTheRightCells) {
   WithheldCase c;
   c.name = "step";
