@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 #include <random>
+#include <stdexcept>
 
 #include "gap/candidates.h"
 #include "gap/design.h"
@@ -163,6 +164,24 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidualAndTheEmitterMismatchApart) {
               std::hypot(n.scale[0] * 1.44, q / std::sqrt(12.0)), 1e-12);
 }
 
+// The placement estimate of a table whose simulation reads every metric but the median bias as
+// the real one (and the median as 0): the median bias is the only gap.
+PlacementEstimate PlacementOf(const std::vector<records::PanelMetrics>& rows) {
+  Design d;
+  std::string why;
+  if (!BuildDesign(rows, &d, &why)) throw std::runtime_error(why);
+  Simulations s;
+  s.metrics = d.metrics;
+  s.base.assign(d.real.size(), 0.0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    s.depth_m.push_back(d.cells[c].distance_m);
+    for (int k = 1; k < d.num_metrics(); ++k)
+      s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
+  }
+  const NoiseEstimate n = EstimateNoise(d, s);
+  return EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
+}
+
 // Placement: every test point of a 2 lights × 4 distances × 4 angles table shifted by a draw of
 // τ(D) = 0.05 m + 2 % of D, its four recordings (presets, emitter) sharing it, over replicate
 // noise of 5 mm; one test point set 3 m farther (eight times the law there). REML finds the law
@@ -184,20 +203,7 @@ TEST(Placement, RemlFindsTheScatterLawAndFlagsTheMisplacedPoint) {
     if (r.light == "sunset" && r.distance_m == 12 && r.angle_deg == 20) shift[key] = 3.0;
     r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
   }
-  Design d;
-  std::string why;
-  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
-  Simulations s;
-  s.metrics = d.metrics;
-  s.base.assign(d.real.size(), 0.0);
-  for (int c = 0; c < d.num_cells(); ++c) {
-    s.depth_m.push_back(d.cells[c].distance_m);
-    for (int k = 1; k < d.num_metrics(); ++k)
-      s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
-  }
-  const NoiseEstimate n = EstimateNoise(d, s);
-  const PlacementEstimate pe =
-      EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
+  const PlacementEstimate pe = PlacementOf(rows);
   ASSERT_EQ(pe.num_points, 32);
   const double law16 = pe.Law(0, kMedianBias, 16);
   EXPECT_GT(law16, 0.5 * 0.37) << pe.a[0] << " + " << pe.b[0] << "·D";
@@ -242,19 +248,7 @@ PlacementEstimate UnitPlacement(std::uint32_t seed, bool misplaced) {
     if (misplaced && r.distance_m == 8 && r.angle_deg == 10) shift[key] = 2.0;
     r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
   }
-  Design d;
-  std::string why;
-  if (!BuildDesign(rows, &d, &why)) throw std::runtime_error(why);
-  Simulations s;
-  s.metrics = d.metrics;
-  s.base.assign(d.real.size(), 0.0);
-  for (int c = 0; c < d.num_cells(); ++c) {
-    s.depth_m.push_back(d.cells[c].distance_m);
-    for (int k = 1; k < d.num_metrics(); ++k)
-      s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
-  }
-  const NoiseEstimate n = EstimateNoise(d, s);
-  return EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
+  return PlacementOf(rows);
 }
 
 TEST(Placement, AUnitOfOneLightAndOnePresetStillEstimatesTheScatter) {
