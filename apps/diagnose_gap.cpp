@@ -5,6 +5,8 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <cctype>
+#include <initializer_list>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -32,7 +34,7 @@ constexpr char kUsage[] =
     "gap lies, which registered effect explains it, how far it shrinks (in sample and held\n"
     "out). Writes DIR/gap.json and DIR/report.md, all or none. --cases proves the method on\n"
     "tables made with known effects under placement scatter (docs/gap/cases.md): a table on\n"
-    "stdout and in DIR/cases.md. Options (default):\n"
+    "stdout and in DIR/cases.md (each case's gap.json in DIR/cases/). Options (default):\n"
     "  --real FILE          the real panel-metrics CSV (required without --cases)\n"
     "  --out DIR            output folder (required without --cases)\n"
     "  --protocol FILE      protocol YAML: scene, distance meaning (config/protocol_paper.yaml,\n"
@@ -131,14 +133,26 @@ int main(int argc, char** argv) {
         if (!r.success) throw BadInput(real_csv + ": " + r.message);
         gap::ReportContext ctx{io::BaseName(real_csv), "", protocol_file, sensor_file, base.seed,
                                DEPTHBIAS_VERSION};
-        outcomes.push_back(
-            gap::JudgeCase(gap::GapJson(r, params, ctx), gap::FieldCampaignCase(), rows));
+        const std::string json = gap::GapJson(r, params, ctx);
+        outcomes.push_back(gap::JudgeCase(json, gap::FieldCampaignCase(), rows));
+        outcomes.back().gap_json = json;
       }
-      const std::string table = gap::FormatCases(
-          outcomes, gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999));
+      const std::vector<gap::CaseOutcome> nulls =
+          gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999);
+      const std::string table = gap::FormatCases(outcomes, nulls);
       std::fputs(table.c_str(), stdout);
-      if (!out_dir.empty()) {
-        fs::create_directories(out_dir);
+      if (!out_dir.empty()) {  // the table, and each case's gap.json in DIR/cases/
+        fs::create_directories(fs::path(out_dir) / "cases");
+        for (const std::vector<gap::CaseOutcome>* list :
+             std::initializer_list<const std::vector<gap::CaseOutcome>*>{&outcomes, &nulls})
+          for (const gap::CaseOutcome& o : *list) {
+            std::string name = o.truth.name.empty() ? "field" : o.truth.name;
+            for (char& ch : name)
+              if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+            if (!o.gap_json.empty())
+              io::WriteFileAtomic((fs::path(out_dir) / "cases" / (name + ".json")).string(),
+                                  o.gap_json);
+          }
         io::WriteFileAtomic(cases_md, table);
       }
       return apps::kExitOk;

@@ -233,7 +233,9 @@ std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
     const DiagnoseResult r = DiagnoseWith(design, *shared, base, params);
     if (!r.success) throw std::invalid_argument(cases[i].name + ": " + r.message);
     const ReportContext ctx{cases[i].name, "", "", "", base.seed, ""};
-    out.push_back(JudgeCase(GapJson(r, params, ctx), cases[i], rows));
+    const std::string json = GapJson(r, params, ctx);
+    out.push_back(JudgeCase(json, cases[i], rows));
+    out.back().gap_json = json;
   }
   return out;
 }

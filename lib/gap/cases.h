@@ -94,6 +94,7 @@ struct CaseOutcome {
   bool has_unexplained = false;
   bool pass = false;
   std::string why;                   // every criterion not met ("" when it passes)
+  std::string gap_json;              // what the diagnosis wrote (RunWithheldCases)
 };
 
 // Judges one diagnosis, given as the gap.json it wrote, against the case it was made from;
