@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "gap/nested.h"
+#include "gap/report_util.h"
 #include "gap/select.h"
 
 namespace depthbias::gap {
@@ -35,9 +36,11 @@ bool DiagnoseParams::IsValid(std::string* why) const {
   if (!simulate.IsValid(why) || !fit.IsValid(why)) return false;
   if (!(confounded_r > 0 && confounded_r <= 1) || !(absorb_r > 0 && absorb_r <= 1) ||
       !(alpha > 0 && alpha < 1) ||
-      max_selected < 0 || max_selected > 10) {
+      max_selected < 0 || max_selected > 10 ||
+      !(min_effect_shrink_pct >= 0 && min_effect_shrink_pct < 100)) {
     if (why)
-      *why = "need confounded_r and absorb_r in (0, 1], alpha in (0, 1), max_selected in [0, 10]";
+      *why = "need confounded_r and absorb_r in (0, 1], alpha in (0, 1), max_selected in "
+             "[0, 10], min_effect_shrink_pct in [0, 100)";
     return false;
   }
   return true;
@@ -177,8 +180,12 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           count += std::count(f.selected.begin(), f.selected.end(), r.steps[i].effect) ? 1 : 0;
         // The folds' selections must earn on their held-out cells both as the fits predict
         // them and as the simulator reproduces them.
+        const double calibrated = r.nested.simulated_calibrated.overall;
         const bool simulated_earns =
-            std::isnan(r.nested.gain_simulated) || r.nested.gain_simulated > 0;
+            std::isnan(r.nested.gain_simulated) ||
+            (r.nested.gain_simulated > 0 && calibrated > 0 &&
+             100 * (calibrated - r.nested.simulated.overall) / calibrated >=
+                 params.min_effect_shrink_pct);
         const bool earns = r.nested.gain > 0 && simulated_earns &&
                            2 * count >= static_cast<int>(r.nested.folds.size());
         if (earns) {
@@ -192,7 +199,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                               " held out" +
                               (std::isnan(r.nested.gain_simulated)
                                    ? std::string()
-                                   : ", " + Num(r.nested.gain_simulated) + " simulated") +
+                                   : ", " + Num(r.nested.gain_simulated) + " simulated, " +
+                                         Num(text::ShrinkPct(r.nested.simulated_calibrated,
+                                                       r.nested.simulated)) +
+                                         " % of the calibrated base's gap (" +
+                                         Num(params.min_effect_shrink_pct) + " % needed)") +
                               ")");
         }
       }

@@ -64,6 +64,11 @@ struct DiagnoseParams {
   bool placement = true;       // placement scatter as a variance component (placement.h)
   bool nested = true;          // the outer hold-out around the whole diagnosis
   double placement_alpha = 0.05;  // a test point beyond the law (Bonferroni over points)
+  // An effect is kept only if the outer folds' selections, simulated on their held-out cells,
+  // remove at least this share of the gap each fold's calibrated base leaves there [%]: an
+  // effect a safety engineer acts on must matter, not only beat chance. Chosen on tables made
+  // at seed 7 (every case and 20 null tables), never on the seed the proof is judged at.
+  double min_effect_shrink_pct = 10;
 
   bool IsValid(std::string* why) const;
 };

@@ -224,6 +224,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   w.Number("huber_k", p.fit.huber_k).Number("tau_log_sigma", p.fit.tau_log_sigma);
   w.Number("tau_logit_p", p.fit.tau_logit_p).Number("confounded_r", p.confounded_r);
   w.Number("absorb_r", p.absorb_r).Number("alpha", p.alpha);
+  w.Number("min_effect_shrink_pct", p.min_effect_shrink_pct);
   w.Integer("simulations", r.simulations);
   w.BeginArray("candidates");
   for (const auto& c : r.candidates) w.String(c.effect);
