@@ -63,15 +63,15 @@ std::vector<int> FoldIds(const std::vector<Sample>& samples, CvScheme scheme) {
   return ids;
 }
 
-CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& params,
-                       CvScheme scheme) {
+CvResult CrossValidateFolds(
+    const std::vector<Sample>& samples, CvScheme scheme,
+    const std::function<FitResult(int fold, const std::vector<Sample>& train)>& fit_fold) {
   CvResult r;
   r.scheme = scheme;
   if (scheme == CvScheme::kNone) {
     r.message = "no cross-validation asked";
     return r;
   }
-  FitParams p = params;  // with covariance: the held-out predictive σ
   const auto folds = FoldIds(samples, scheme);
   r.folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
   if (r.folds < 2) {
@@ -82,8 +82,7 @@ CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& para
   r.errors_m.assign(samples.size(), std::numeric_limits<double>::quiet_NaN());
   r.std_m.assign(samples.size(), std::numeric_limits<double>::quiet_NaN());
   for (int f = 0; f < r.folds; ++f) {
-    const auto train = Subset(samples, folds, f, false);
-    const FitResult fit = Fit(train, p);
+    const FitResult fit = fit_fold(f, Subset(samples, folds, f, false));
     if (!fit.success) {
       r.message = "fold " + std::to_string(f) + ": " + fit.message;
       return r;
@@ -100,21 +99,25 @@ CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& para
   return r;
 }
 
+CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& params,
+                       CvScheme scheme) {
+  // With covariance: the held-out predictive σ.
+  return CrossValidateFolds(samples, scheme, [&](int, const std::vector<Sample>& train) {
+    return Fit(train, params);
+  });
+}
+
 CvResult NestedCrossValidate(const std::vector<Sample>& samples,
                              const std::vector<FitParams>& candidates, CvScheme scheme,
                              std::vector<int>* chosen) {
-  CvResult r;
-  r.scheme = scheme;
-  const auto folds = FoldIds(samples, scheme);
-  r.folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
-  if (scheme == CvScheme::kNone || r.folds < 2 || candidates.empty()) {
+  if (chosen) chosen->clear();
+  if (candidates.empty()) {
+    CvResult r;
+    r.scheme = scheme;
     r.message = "nested cross-validation needs a scheme, two folds and a candidate";
     return r;
   }
-  if (chosen) chosen->clear();
-  r.errors_m.assign(samples.size(), std::numeric_limits<double>::quiet_NaN());
-  for (int f = 0; f < r.folds; ++f) {
-    const auto train = Subset(samples, folds, f, false);
+  return CrossValidateFolds(samples, scheme, [&](int, const std::vector<Sample>& train) {
     int best = -1;
     double best_rmse = std::numeric_limits<double>::infinity();
     for (size_t c = 0; c < candidates.size(); ++c) {
@@ -124,25 +127,17 @@ CvResult NestedCrossValidate(const std::vector<Sample>& samples,
         best = static_cast<int>(c);
       }
     }
+    FitResult fit;
     if (best < 0) {
-      r.message = "fold " + std::to_string(f) + ": no candidate could be cross-validated";
-      return r;
+      fit.message = "no candidate could be cross-validated";
+      return fit;
     }
     FitParams p = candidates[static_cast<size_t>(best)];
     p.compute_covariance = false;
-    const FitResult fit = Fit(train, p);
-    if (!fit.success) {
-      r.message = "fold " + std::to_string(f) + ": " + fit.message;
-      return r;
-    }
-    if (chosen) chosen->push_back(best);
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (folds[i] == f) r.errors_m[i] = PredictBias(fit, samples[i].x) - samples[i].target_m;
-    }
-  }
-  Summarize(&r);
-  r.success = std::isfinite(r.rmse_m);
-  return r;
+    fit = Fit(train, p);
+    if (fit.success && chosen) chosen->push_back(best);
+    return fit;
+  });
 }
 
 }  // namespace depthbias::model

@@ -8,6 +8,7 @@
 //    has not seen.
 // Each fold refits with the same parameters on the rest and predicts the held-out rows.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,13 @@ struct CvResult {
   std::vector<double> std_m;     // held-out predictive σ per sample
   std::vector<int> chosen;       // candidate chosen in each fold, when the fit is a choice
 };
+
+// The loop every cross-validation shares: for each fold of `scheme`, fit_fold(fold, training
+// rows) gives the fit that predicts the held-out rows (its guarded bias and predictive σ); a
+// failed fit ends it with "fold f: <its message>". Fills errors_m, std_m, rmse_m, mae_m.
+CvResult CrossValidateFolds(
+    const std::vector<Sample>& samples, CvScheme scheme,
+    const std::function<FitResult(int fold, const std::vector<Sample>& train)>& fit_fold);
 
 CvResult CrossValidate(const std::vector<Sample>& samples, const FitParams& params,
                        CvScheme scheme);

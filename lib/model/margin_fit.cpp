@@ -148,47 +148,13 @@ JointFitResult FitWithMargins(const std::vector<std::vector<Sample>>& scenarios,
 
 CvResult CrossValidateWithMargins(const std::vector<Sample>& samples, const FitParams& params,
                                   CvScheme scheme, const std::vector<ResidualData>& fixed) {
-  CvResult r;
-  r.scheme = scheme;
-  if (scheme == CvScheme::kNone) {
-    r.message = "no cross-validation asked";
-    return r;
-  }
-  const auto folds = FoldIds(samples, scheme);
-  r.folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
-  if (r.folds < 2) {
-    r.message = "cross-validation needs at least two folds, the rows give " +
-                std::to_string(r.folds);
-    return r;
-  }
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  r.errors_m.assign(samples.size(), nan);
-  r.std_m.assign(samples.size(), nan);
-  for (int f = 0; f < r.folds; ++f) {
-    std::vector<Sample> train;
-    for (size_t i = 0; i < samples.size(); ++i)
-      if (folds[i] != f) train.push_back(samples[i]);
-    const JointFitResult fit = FitWithMargins({train}, params, fixed);
-    if (!fit.success) {
-      r.message = "fold " + std::to_string(f) + ": " + fit.message;
-      return r;
-    }
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (folds[i] != f) continue;
-      r.errors_m[i] = PredictBias(fit.fits[0], samples[i].x) - samples[i].target_m;
-      r.std_m[i] = PredictiveStd(fit.fits[0], samples[i].x);
-    }
-  }
-  double s2 = 0.0, sa = 0.0;
-  for (double e : r.errors_m) {
-    s2 += e * e;
-    sa += std::abs(e);
-  }
-  r.rmse_m = std::sqrt(s2 / static_cast<double>(samples.size()));
-  r.mae_m = sa / static_cast<double>(samples.size());
-  r.success = std::isfinite(r.rmse_m);
-  if (!r.success) r.message = "a held-out prediction is not finite";
-  return r;
+  return CrossValidateFolds(samples, scheme, [&](int, const std::vector<Sample>& train) {
+    JointFitResult joint = FitWithMargins({train}, params, fixed);
+    if (joint.success) return joint.fits[0];
+    FitResult failed;
+    failed.message = joint.message;
+    return failed;
+  });
 }
 
 }  // namespace depthbias::model

@@ -134,50 +134,21 @@ std::vector<double> Selector::PooledRmse() {
 
 CvResult CrossValidateSelected(Selector* selector, int group, CvScheme scheme,
                                const std::function<std::vector<ResidualData>(int)>& fixed_for) {
-  const std::vector<Sample>& samples = selector->scenarios().at(static_cast<size_t>(group));
-  CvResult r;
-  r.scheme = scheme;
-  const auto folds = FoldIds(samples, scheme);
-  r.folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
-  if (scheme == CvScheme::kNone || r.folds < 2) {
-    r.message = "cross-validation needs at least two folds, the rows give " +
-                std::to_string(r.folds);
-    return r;
-  }
-  r.errors_m.assign(samples.size(), kNan);
-  r.std_m.assign(samples.size(), kNan);
-  for (int f = 0; f < r.folds; ++f) {
-    std::vector<Sample> train;
-    for (size_t i = 0; i < samples.size(); ++i)
-      if (folds[i] != f) train.push_back(samples[i]);
-    std::string why;
-    const int c = selector->Choose(group, &train, &why);
-    if (c < 0) {
-      r.message = "fold " + std::to_string(f) + ": " + why;
-      return r;
-    }
-    r.chosen.push_back(c);
-    const JointFitResult fit =
-        FitWithMargins({train}, selector->candidates()[static_cast<size_t>(c)], fixed_for(c));
-    if (!fit.success) {
-      r.message = "fold " + std::to_string(f) + ": " + fit.message;
-      return r;
-    }
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (folds[i] != f) continue;
-      r.errors_m[i] = PredictBias(fit.fits[0], samples[i].x) - samples[i].target_m;
-      r.std_m[i] = PredictiveStd(fit.fits[0], samples[i].x);
-    }
-  }
-  double s2 = 0.0, sa = 0.0;
-  for (double e : r.errors_m) {
-    s2 += e * e;
-    sa += std::abs(e);
-  }
-  r.rmse_m = std::sqrt(s2 / static_cast<double>(samples.size()));
-  r.mae_m = sa / static_cast<double>(samples.size());
-  r.success = std::isfinite(r.rmse_m);
-  if (!r.success) r.message = "a held-out prediction is not finite";
+  std::vector<int> chosen;
+  CvResult r = CrossValidateFolds(
+      selector->scenarios().at(static_cast<size_t>(group)), scheme,
+      [&](int, const std::vector<Sample>& train) {
+        FitResult fit;
+        const int c = selector->Choose(group, &train, &fit.message);
+        if (c < 0) return fit;
+        chosen.push_back(c);
+        const JointFitResult joint =
+            FitWithMargins({train}, selector->candidates()[static_cast<size_t>(c)], fixed_for(c));
+        if (joint.success) return joint.fits[0];
+        fit.message = joint.message;
+        return fit;
+      });
+  r.chosen = chosen;
   return r;
 }
 
