@@ -15,35 +15,17 @@
 # Every failing step says which, on one line, and the script exits non-zero.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-fail() {
-  echo "test_ros2_campaign: $*" >&2
-  exit 1
-}
-BUILD=$(cd "${1:-$ROOT/build}" 2>/dev/null && pwd) || fail "no build directory ${1:-$ROOT/build}"
-APPS=$BUILD/apps
-for tool in simulate bag_info panel_extract fit_bias diagnose_gap obstacle_detector; do
-  [ -x "$APPS/$tool" ] || fail "$APPS/$tool not built; run scripts/build.sh"
-done
+NAME=test_ros2_campaign
+# shellcheck source=scripts/workflow_test_lib.sh
+. "$ROOT/scripts/workflow_test_lib.sh"
+use_build "${1:-}" simulate bag_info panel_extract fit_bias diagnose_gap obstacle_detector
 WORK=$BUILD/ros2-campaign-test
 rm -rf "$WORK"
 mkdir -p "$WORK/sim" "$WORK/campaign"
 FRAMES=3
 
 # 1. Sixteen test points as rosbag2 MCAP recordings.
-cat >"$WORK/protocol.yaml" <<EOF2
-protocol:
-  distances_m: [4, 8, 12, 16]
-  angles_deg: [0, 10, 20, 35]
-  presets: [HA]
-  emitters: ["on"]
-  lights: [daylight]
-  distance_is: range
-  frames: $FRAMES
-scene:
-  camera_height_m: 1.0
-  panel_center_height_m: 1.0
-sensor: $ROOT/config/sensor_calibrated.yaml
-EOF2
+write_protocol "$WORK/protocol.yaml" "4, 8, 12, 16" "0, 10, 20, 35" HA $FRAMES
 "$APPS/simulate" --protocol "$WORK/protocol.yaml" --out-dir "$WORK/sim" --format rosbag2 \
     --seed 3 --threads 2 >"$WORK/simulate.log" 2>&1 ||
   fail "simulate --format rosbag2 failed, see $WORK/simulate.log"

@@ -12,41 +12,18 @@
 # Every failing step says which, on one line, and the script exits non-zero.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-fail() {
-  echo "test_workflow: $*" >&2
-  exit 1
-}
-BUILD=$(cd "${1:-$ROOT/build}" 2>/dev/null && pwd) || fail "no build directory ${1:-$ROOT/build}"
-APPS=$BUILD/apps
-# The project's Python environment: the one the build was configured with (DEPTHBIAS_PYTHON in
-# its CMakeCache), else .venv/.
-PYTHON=$(sed -n 's/^DEPTHBIAS_PYTHON:[A-Z]*=//p' "$BUILD/CMakeCache.txt" 2>/dev/null || true)
-[ -x "${PYTHON:-}" ] || PYTHON=$ROOT/.venv/bin/python
-SNAKEMAKE=$(dirname "$PYTHON")/snakemake
-[ -x "$SNAKEMAKE" ] || fail "$SNAKEMAKE not found; run scripts/setup.sh"
-for tool in simulate panel_extract fit_bias; do
-  [ -x "$APPS/$tool" ] || fail "$APPS/$tool not built; run scripts/build.sh"
-done
+NAME=test_workflow
+# shellcheck source=scripts/workflow_test_lib.sh
+. "$ROOT/scripts/workflow_test_lib.sh"
+use_build "${1:-}" simulate panel_extract fit_bias
+use_snakemake
 WORK=$BUILD/workflow-test
 rm -rf "$WORK"
 mkdir -p "$WORK/units" "$WORK/tools"
 start=$(date +%s.%N)
 
 # 1. Two units: 3 distances × 2 angles, High Density, emitter on, daylight; 3 frames each.
-cat >"$WORK/protocol.yaml" <<EOF
-protocol:
-  distances_m: [4, 8, 12]
-  angles_deg: [0, 20]
-  presets: [HD]
-  emitters: ["on"]
-  lights: [daylight]
-  distance_is: range
-  frames: 3
-scene:
-  camera_height_m: 1.0
-  panel_center_height_m: 1.0
-sensor: $ROOT/config/sensor_calibrated.yaml
-EOF
+write_protocol "$WORK/protocol.yaml" "4, 8, 12" "0, 20" HD 3
 seed=1
 for unit in unit_a unit_b; do
   "$APPS/simulate" --protocol "$WORK/protocol.yaml" --out-dir "$WORK/units/$unit" \

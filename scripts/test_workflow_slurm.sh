@@ -24,19 +24,11 @@ skip() {
   echo "test_workflow_slurm: skipped: $*"
   exit $SKIPPED
 }
-fail() {
-  echo "test_workflow_slurm: $*" >&2
-  exit 1
-}
-BUILD=$(cd "${1:-$ROOT/build}" 2>/dev/null && pwd) || fail "no build directory ${1:-$ROOT/build}"
-APPS=$BUILD/apps
-for tool in simulate panel_extract fit_bias diagnose_gap; do
-  [ -x "$APPS/$tool" ] || fail "$APPS/$tool not built; run scripts/build.sh"
-done
-PYTHON=$(sed -n 's/^DEPTHBIAS_PYTHON:[A-Z]*=//p' "$BUILD/CMakeCache.txt" 2>/dev/null || true)
-[ -x "${PYTHON:-}" ] || PYTHON=$ROOT/.venv/bin/python
-SNAKEMAKE=$(dirname "$PYTHON")/snakemake
-[ -x "$SNAKEMAKE" ] || fail "$SNAKEMAKE not found; run scripts/setup.sh"
+NAME=test_workflow_slurm
+# shellcheck source=scripts/workflow_test_lib.sh
+. "$ROOT/scripts/workflow_test_lib.sh"
+use_build "${1:-}" simulate panel_extract fit_bias diagnose_gap
+use_snakemake
 [ "$(id -u)" -eq 0 ] || skip "not root (munged, slurmd and slurmstepd need root here)"
 
 # --- What the cluster needs: SLURM, munge, MariaDB, the executor plugin -----------------------
@@ -212,20 +204,7 @@ chmod +x "$C/bin/srun"
 WORK=$BUILD/workflow-slurm-test
 rm -rf "$WORK"
 mkdir -p "$WORK/units" "$WORK/tools" "$WORK/tools_hung" "$WORK/run"
-cat >"$WORK/protocol.yaml" <<EOF
-protocol:
-  distances_m: [4, 8, 12]
-  angles_deg: [0, 20]
-  presets: [HD]
-  emitters: ["on"]
-  lights: [daylight]
-  distance_is: range
-  frames: 3
-scene:
-  camera_height_m: 1.0
-  panel_center_height_m: 1.0
-sensor: $ROOT/config/sensor_calibrated.yaml
-EOF
+write_protocol "$WORK/protocol.yaml" "4, 8, 12" "0, 20" HD 3
 UNIT_A=unit_a
 UNIT_B='unit b;$(touch PWNED)'
 seed=1

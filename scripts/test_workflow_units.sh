@@ -13,19 +13,11 @@
 # Every failing check says which, on one line, and the script exits non-zero.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-fail() {
-  echo "test_workflow_units: $*" >&2
-  exit 1
-}
-BUILD=$(cd "${1:-$ROOT/build}" 2>/dev/null && pwd) || fail "no build directory ${1:-$ROOT/build}"
-APPS=$BUILD/apps
-PYTHON=$(sed -n 's/^DEPTHBIAS_PYTHON:[A-Z]*=//p' "$BUILD/CMakeCache.txt" 2>/dev/null || true)
-[ -x "${PYTHON:-}" ] || PYTHON=$ROOT/.venv/bin/python
-SNAKEMAKE=$(dirname "$PYTHON")/snakemake
-[ -x "$SNAKEMAKE" ] || fail "$SNAKEMAKE not found; run scripts/setup.sh"
-for tool in simulate panel_extract fit_bias; do
-  [ -x "$APPS/$tool" ] || fail "$APPS/$tool not built; run scripts/build.sh"
-done
+NAME=test_workflow_units
+# shellcheck source=scripts/workflow_test_lib.sh
+. "$ROOT/scripts/workflow_test_lib.sh"
+use_build "${1:-}" simulate panel_extract fit_bias
+use_snakemake
 WORK=$BUILD/workflow-units-test
 rm -rf "$WORK"
 mkdir -p "$WORK/run"
@@ -35,20 +27,7 @@ snake() {  # snake LOG UNITS_DIR: snakemake -j 2 (keep going), outputs in $WORK/
       >"$WORK/$1" 2>&1
 }
 
-cat >"$WORK/protocol.yaml" <<EOF
-protocol:
-  distances_m: [4, 8, 12]
-  angles_deg: [0, 20]
-  presets: [HD]
-  emitters: ["on"]
-  lights: [daylight]
-  distance_is: range
-  frames: 2
-scene:
-  camera_height_m: 1.0
-  panel_center_height_m: 1.0
-sensor: $ROOT/config/sensor_calibrated.yaml
-EOF
+write_protocol "$WORK/protocol.yaml" "4, 8, 12" "0, 20" HD 2
 "$APPS/simulate" --protocol "$WORK/protocol.yaml" --out-dir "$WORK/sim" --seed 5 --threads 2 \
     >"$WORK/simulate.log" 2>&1 || fail "simulate failed, see $WORK/simulate.log"
 good_unit() {  # good_unit DIR: the six simulated recordings and their manifest
