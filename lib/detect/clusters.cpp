@@ -4,6 +4,7 @@
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
 
+#include "detect/non_ground_cloud.h"
 #include "detect/stages.h"
 
 namespace depthbias::detect {
@@ -13,15 +14,8 @@ std::vector<std::vector<int>> FindClusters(const std::vector<Eigen::Vector3f>& v
                                            const ClusterParams& params, double noise_per_m2) {
   std::vector<std::vector<int>> clusters;
   std::vector<int> rest;  // voxel indices
-  for (size_t i = 0; i < voxels.size(); ++i)
-    if (!is_ground[i]) rest.push_back(static_cast<int>(i));
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr cloud = NonGroundCloud(voxels, is_ground, &rest);
   if (rest.empty()) return clusters;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  cloud->resize(rest.size());
-  for (size_t j = 0; j < rest.size(); ++j) {
-    const Eigen::Vector3f& q = voxels[static_cast<size_t>(rest[j])];
-    (*cloud)[j] = pcl::PointXYZ(q.x(), q.y(), q.z());
-  }
   pcl::search::KdTree<pcl::PointXYZ> tree(false);
   tree.setInputCloud(cloud);
   std::vector<char> seen(rest.size(), 0);

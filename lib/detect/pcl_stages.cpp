@@ -10,6 +10,7 @@
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/conditional_euclidean_clustering.h>
 
+#include "detect/non_ground_cloud.h"
 #include "detect/stages.h"
 
 namespace depthbias::detect {
@@ -39,17 +40,11 @@ std::vector<std::vector<int>> PclClusters(const std::vector<Eigen::Vector3f>& vo
                                           const ClusterParams& params, double noise_per_m2) {
   std::vector<std::vector<int>> clusters;
   std::vector<int> rest;  // voxel indices
-  for (size_t i = 0; i < voxels.size(); ++i)
-    if (!is_ground[i]) rest.push_back(static_cast<int>(i));
+  const pcl::PointCloud<pcl::PointXYZ>::Ptr cloud = NonGroundCloud(voxels, is_ground, &rest);
   if (rest.empty()) return clusters;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  cloud->resize(rest.size());
   double max_r2 = 0.0;
-  for (size_t j = 0; j < rest.size(); ++j) {
-    const Eigen::Vector3f& q = voxels[static_cast<size_t>(rest[j])];
-    (*cloud)[j] = pcl::PointXYZ(q.x(), q.y(), q.z());
-    max_r2 = std::max(max_r2, static_cast<double>(q.squaredNorm()));
-  }
+  for (const pcl::PointXYZ& q : *cloud)
+    max_r2 = std::max(max_r2, static_cast<double>(q.getVector3fMap().squaredNorm()));
   pcl::ConditionalEuclideanClustering<pcl::PointXYZ> cec(false);
   cec.setInputCloud(cloud);
   // Every neighbour within the largest tolerance is offered to the condition, which keeps
