@@ -1,6 +1,6 @@
 #pragma once
-// The voxels off the ground as a PCL cloud, for the clustering stages (ours and PCL's). Private
-// to detect: it includes PCL, which stages.h keeps out of every other file.
+// Private to detect. The voxels off the ground as a PCL cloud, for the clustering stages (ours
+// and PCL's); it includes PCL, which stages.h keeps out of every other file.
 
 #include <Eigen/Core>
 #include <pcl/point_cloud.h>
