@@ -46,6 +46,9 @@ constexpr char kUsage[] =
     "                       tables without effect at S + 1999 + i)\n"
     "  --frames N           simulated frames per cell, 1 to 100000 (10)\n"
     "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n"
+"  --min-effect-shrink P  an effect is kept only if the outer folds' selections, simulated,\n"
+    "                       remove P % of the calibrated base's held-out gap (10)\n"
+    "  --min-own-shrink P   and only if leaving it out of them brings back P % of it (10)\n"
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
     "                       scripts/make_field_campaign.py's bags, offset -0.25 px)\n"
     "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
@@ -96,6 +99,8 @@ int main(int argc, char** argv) {
       else if (a == "--threads") threads = args.Number(true, 1, 256);
       else if (a == "--cases") cases = true;
       else if (a == "--field") real_csv = args.Value();
+      else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
+      else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
       else throw BadInput("unknown argument '" + a + "' (see diagnose_gap --help)");
     }
     params.simulate.frames = static_cast<int>(frames);

@@ -9,6 +9,7 @@
 #include "gap/nested.h"
 #include "gap/report_util.h"
 #include "gap/select.h"
+#include "gap/unexplained.h"
 
 namespace depthbias::gap {
 namespace {
@@ -37,10 +38,11 @@ bool DiagnoseParams::IsValid(std::string* why) const {
   if (!(confounded_r > 0 && confounded_r <= 1) || !(absorb_r > 0 && absorb_r <= 1) ||
       !(alpha > 0 && alpha < 1) ||
       max_selected < 0 || max_selected > 10 ||
-      !(min_effect_shrink_pct >= 0 && min_effect_shrink_pct < 100)) {
+      !(min_effect_shrink_pct >= 0 && min_effect_shrink_pct < 100) ||
+      !(min_own_shrink_pct >= 0 && min_own_shrink_pct < 100)) {
     if (why)
       *why = "need confounded_r and absorb_r in (0, 1], alpha in (0, 1), max_selected in "
-             "[0, 10], min_effect_shrink_pct in [0, 100)";
+             "[0, 10], min_effect_shrink_pct and min_own_shrink_pct in [0, 100)";
     return false;
   }
   return true;
@@ -176,8 +178,23 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       std::vector<SelectionStep> steps;
       for (size_t i = 0; i < r.steps.size(); ++i) {
         int count = 0;
-        for (const auto& f : r.nested.folds)
-          count += std::count(f.selected.begin(), f.selected.end(), r.steps[i].effect) ? 1 : 0;
+        // Its own simulated part in the folds that select it, and their calibrated gap.
+        double own = 0, own_base = 0;
+        bool own_known = true;
+        for (const auto& f : r.nested.folds) {
+          const auto at = std::find(f.selected.begin(), f.selected.end(), r.steps[i].effect);
+          if (at == f.selected.end()) continue;
+          ++count;
+          const size_t j = static_cast<size_t>(at - f.selected.begin());
+          if (j >= f.effect_gain_simulated.size() || !std::isfinite(f.simulated_calibrated_sq)) {
+            own_known = false;
+            continue;
+          }
+          own += f.effect_gain_simulated[j];
+          own_base += f.simulated_calibrated_sq;
+        }
+        const double own_pct = own_known && own_base > 0 ? 100 * own / own_base : NAN;
+        const bool own_earns = !own_known || count == 0 || own_pct >= params.min_own_shrink_pct;
         // The folds' selections must earn on their held-out cells both as the fits predict
         // them and as the simulator reproduces them.
         const double calibrated = r.nested.simulated_calibrated.overall;
@@ -186,7 +203,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
             (r.nested.gain_simulated > 0 && calibrated > 0 &&
              100 * (calibrated - r.nested.simulated.overall) / calibrated >=
                  params.min_effect_shrink_pct);
-        const bool earns = r.nested.gain > 0 && simulated_earns &&
+        const bool earns = r.nested.gain > 0 && simulated_earns && own_earns &&
                            2 * count >= static_cast<int>(r.nested.folds.size());
         if (earns) {
           kept.push_back(current.terms[i].term);
@@ -204,6 +221,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                                                        r.nested.simulated)) +
                                          " % of the calibrated base's gap (" +
                                          Num(params.min_effect_shrink_pct) + " % needed)") +
+                              (std::isnan(own_pct)
+                                   ? std::string()
+                                   : "; left out of them, " + Num(own_pct) +
+                                         " % of the calibrated base's gap comes back (" +
+                                         Num(params.min_own_shrink_pct) + " % needed)") +
                               ")");
         }
       }
@@ -261,7 +283,9 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   r.selected_in = Stat(model, r.z_selected, all);
   r.selected_heldout = Stat(model, r.z_selected_heldout, current_ho.cells);
   r.remaining = SignificantCells(design, r.z_selected, params.alpha);
-  r.unexplained = DescribeRest(model, model.Predict(current), r.placement, params.alpha);
+  RestParams rest;
+  rest.alpha = params.alpha;
+  r.unexplained = DescribeRest(model, model.Predict(current), r.placement, rest);
   if (params.verify) {
     try {
       const std::vector<double> v = SimulateValues(

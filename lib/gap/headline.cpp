@@ -38,18 +38,29 @@ std::string Headline(const DiagnoseResult& r) {
   // 1. Range error the simulator does not reproduce.
   bool range = false;
   for (const Unexplained& u : r.unexplained) {
-    if (u.metric != "median_bias_m") continue;
+    if (u.metric != "median_bias_m" || u.beyond_placement_law) continue;  // those: below
     range = true;
-    o << "range: where " << u.where << ", the camera " << Direction(u.size) << " by "
-      << Num(std::fabs(u.size)) << " m (95 % ± " << Num(1.96 * u.size_se, 2) << " m, "
-      << u.cells.size() << " recordings; form " << u.form;
-    if (u.form == "∝ D" || u.form == "∝ D²")
-      o << ", " << Signed(u.size_at_max) << " m at the far end";
-    o << "); no registered effect explains it\n";
+    o << "range: where " << u.where << ", the camera " << Direction(u.size) << " by ";
+    if (u.form == "∝ D" || u.form == "∝ D²")  // a law in distance: its far end first
+      o << Num(std::fabs(u.size_at_max)) << " m at the far end, growing " << u.form
+        << " (mean " << Signed(u.size) << " m, 95 % ± " << Num(1.96 * u.size_se, 2) << " m, "
+        << u.cells.size() << " recordings)";
+    else
+      o << Num(std::fabs(u.size)) << " m (95 % ± " << Num(1.96 * u.size_se, 2) << " m, "
+        << u.cells.size() << " recordings; form " << u.form << ")";
+    o << "; no registered effect explains it\n";
   }
-  if (!range && km >= 0)
+  if (!range && km >= 0) {
+    int beyond = 0;
+    for (const Unexplained& u : r.unexplained)
+      beyond += u.metric == "median_bias_m" && u.beyond_placement_law;
     o << "range: the simulator" << (r.steps.empty() ? "" : " with the selected effects")
-      << " reproduces the camera's median range within noise and placement scatter\n";
+      << " reproduces the camera's median range within noise and placement scatter";
+    if (beyond > 0)
+      o << ", but for " << beyond << " test point" << (beyond > 1 ? "s" : "")
+        << " beyond the placement law (below)";
+    o << "\n";
+  }
   // 2. Placement.
   if (!pe.empty() && km >= 0) {
     auto law = [&](double d) { return pe.Law(km, kMedianBias, d); };
@@ -57,16 +68,17 @@ std::string Headline(const DiagnoseResult& r) {
       << Num(100 * pe.b[km], 2) << " % of distance (" << Num(law(4), 2) << " m at 4 m, "
       << Num(law(16), 2) << " m = " << Num(100 * law(16) / 16, 2) << " % at 16 m; REML over "
       << pe.points_used[km] << " test points)\n";
-    std::vector<int> flagged;
-    for (int t = 0; t < pe.num_points; ++t)
-      if (pe.flagged[km][t]) flagged.push_back(t);
-    std::sort(flagged.begin(), flagged.end(), [&](int a, int b) {
-      return pe.departure[km][a] > pe.departure[km][b];
-    });
-    for (int t : flagged)
-      o << "  beyond it: " << PointName(pe, t) << ": " << Signed(pe.departure[km][t], 2)
-        << " m (z " << Num(pe.departure_z[km][t], 2) << "; "
-        << (pe.departure[km][t] > 0 ? "reads far: over-reads" : "reads near: under-reads")
+    // The test points beyond it (unexplained.h: of a flagged pair of partners, the one that
+    // departs from its light and distance's other test points), farthest reading first.
+    std::vector<const Unexplained*> beyond;
+    for (const Unexplained& u : r.unexplained)
+      if (u.metric == "median_bias_m" && u.beyond_placement_law) beyond.push_back(&u);
+    std::sort(beyond.begin(), beyond.end(),
+              [](const Unexplained* a, const Unexplained* b) { return a->size > b->size; });
+    for (const Unexplained* u : beyond)
+      o << "  beyond it: " << u->where << ": " << Signed(u->size, 2) << " m (95 % ± "
+        << Num(1.96 * u->size_se, 2) << " m, from the other test points of its light and "
+        << "distance; " << (u->size > 0 ? "reads far: over-reads" : "reads near: under-reads")
         << ")\n";
   }
   // 3. Emitter.
@@ -159,7 +171,10 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
     }
     o << "\nTest points beyond the law (p < " << Num(p.placement_alpha) << " / " << pe.num_points
       << ", left out of its estimate and given their own departure as scatter, so that they "
-      << "are never taken for a camera effect):\n\n| test point | metric | departure | z |\n"
+      << "are never taken for a camera effect). The departure is about the fixed effects: with "
+      << "two lights a misplaced point's partner of the other light departs the other way, and "
+      << "the lines above name the one that departs from its light and distance's other test "
+      << "points:\n\n| test point | metric | departure | z |\n"
       << "|---|---|---|---|\n";
     int rows = 0;
     for (int k = 0; k < kk; ++k)
@@ -232,15 +247,22 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
   for (const auto& d : r.dropped) o << "- not kept: " << d << "\n";
   o << "\n## Not explained by any registered effect\n\n";
   if (r.unexplained.empty())
-    o << "No metric's remaining gap is significant (χ², p < " << Num(p.alpha) << " / metrics).\n";
+    o << "No metric's remaining gap lies in a group of cells beyond chance (its best group "
+         "against tables with their test points permuted, p < "
+      << Num(p.alpha) << " / metrics), and no test point is placed beyond the scatter's law.\n";
   else
-    o << "| metric | where | size [95 %] | form | at the far end | share of its rest | χ² / "
-         "cells |\n|---|---|---|---|---|---|---|\n";
+    o << "A metric's rest is listed where its best group of cells departs beyond chance (against "
+         "tables with their test points permuted as wholes, p < "
+      << Num(p.alpha) << " / metrics). The median bias's rest shared by every recording "
+      << "(constant, ∝ D or ∝ D²) is judged against signs drawn for test points as wholes, and a "
+      << "test point beyond the placement law is listed too.\n\n"
+      << "| metric | where | size [95 %] | form | at the far end | share of its rest | χ² / "
+         "cells | p |\n|---|---|---|---|---|---|---|---|\n";
   for (const Unexplained& u : r.unexplained)
     o << "| " << u.metric << " | " << u.where << " | " << Signed(u.size) << " ± "
       << Num(1.96 * u.size_se, 2) << " " << u.unit << " | " << u.form << " | "
       << Signed(u.size_at_max) << " | " << Pct(u.share_pct) << " | " << Num(u.chi2) << " / "
-      << u.df << " |\n";
+      << u.df << " | " << Num(u.p_value, 2) << " |\n";
   o << "\n";
   return o.str();
 }

@@ -3,35 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <map>
-#include <sstream>
 #include <stdexcept>
 #include <thread>
 
 #include "gap/localize.h"
 #include "gap/select.h"
+#include "gap/unexplained.h"
 
 namespace depthbias::gap {
-namespace {
-
-std::string Num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-// Level of a cell for a factor (0 distance, 1 angle, 2 preset, 3 light, 4 emitter) as text.
-std::string LevelOf(const sim::Cell& c, int factor) {
-  switch (factor) {
-    case 0: return "distance " + Num(c.distance_m) + " m";
-    case 1: return "angle " + Num(c.angle_deg) + "°";
-    case 2: return "preset " + c.preset;
-    case 3: return "light " + c.light;
-    default: return std::string("emitter ") + (c.emitter_on ? "on" : "off");
-  }
-}
-
-}  // namespace
 
 Design Subset(const Design& d, const std::vector<char>& cells) {
   Design s;
@@ -50,6 +29,14 @@ Design Subset(const Design& d, const std::vector<char>& cells) {
 }
 
 namespace {
+
+// Σz² over the finite entries.
+double SumSq(const std::vector<double>& z) {
+  double s = 0;
+  for (double v : z)
+    if (std::isfinite(v)) s += v * v;
+  return s;
+}
 
 // One outer fold diagnosed without its cells.
 struct FoldRun {
@@ -72,7 +59,7 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
   for (int c = 0; c < d.num_cells(); ++c) {
     train[c] = fold[c] != f;
     out.held[c] = fold[c] == f;
-    if (out.held[c] && nf.held.empty()) nf.held = LevelOf(d.cells[c], 0);
+    if (out.held[c] && nf.held.empty()) nf.held = LevelName(d.cells[c], 0);
     nf.cells += out.held[c];
   }
   if (nf.cells == 0) return out;
@@ -114,6 +101,18 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
       const std::vector<double> mu = simulate(sel.current);
       out.zsc = sel.steps.empty() ? Scaled(model, mu) : Scaled(model, simulate(sel.m0));
       out.zs = Scaled(model, mu);
+      const double all_sq = SumSq(out.zs), calibrated_sq = SumSq(out.zsc);
+      nf.simulated_calibrated_sq = calibrated_sq;
+      // Each effect's own part: the selection simulated without it, the others at their values.
+      for (size_t j = 0; j < sel.current.terms.size(); ++j) {
+        double without_sq = calibrated_sq;
+        if (sel.current.terms.size() > 1) {
+          ModelFit rest = sel.current;
+          rest.terms.erase(rest.terms.begin() + static_cast<long>(j));
+          without_sq = SumSq(Scaled(model, simulate(rest)));
+        }
+        nf.effect_gain_simulated.push_back(without_sq - all_sq);
+      }
       nf.simulated = true;
     } catch (const std::exception& e) {
       out.message = "fold " + nf.held + ": not simulated: " + e.what();
@@ -191,112 +190,6 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   }
   n.run = true;
   return n;
-}
-
-std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<double>& mu,
-                                      const PlacementEstimate& pe, double alpha) {
-  std::vector<Unexplained> out;
-  const Design& d = m.design();
-  const int kk = d.num_metrics();
-  const std::vector<double> z = Scaled(m, mu);
-  // Candidate groups of cells: every level of a factor, of a pair of factors, and every test
-  // point.
-  std::map<std::string, std::vector<int>> groups;
-  for (int c = 0; c < d.num_cells(); ++c) {
-    for (int f = 0; f < 5; ++f) {
-      groups[LevelOf(d.cells[c], f)].push_back(c);
-      for (int g = f + 1; g < 5; ++g)
-        groups[LevelOf(d.cells[c], f) + " × " + LevelOf(d.cells[c], g)].push_back(c);
-    }
-    if (!pe.point.empty()) {
-      const int t = pe.point[c];
-      groups["test point " + pe.point_light[t] + " " + Num(pe.point_distance_m[t]) + " m " +
-             Num(pe.point_angle_deg[t]) + "°"]
-          .push_back(c);
-    }
-  }
-  for (int k = 0; k < kk; ++k) {
-    double total = 0;
-    int n = 0;
-    for (int c = 0; c < d.num_cells(); ++c) {
-      const double v = z[static_cast<size_t>(c) * kk + k];
-      if (std::isfinite(v)) total += v * v, ++n;
-    }
-    if (n == 0 || ChiSquareSurvival(total, n) >= alpha / kk) continue;
-    // The group whose mean departure carries the most of the metric's Σz² for its size:
-    // (share of Σz² its mean explains)² / (its share of the cells).
-    double best_score = 0;
-    std::string best_name;
-    for (const auto& [name, cells] : groups) {
-      double sum = 0;
-      int count = 0;
-      for (int c : cells) {
-        const double v = z[static_cast<size_t>(c) * kk + k];
-        if (std::isfinite(v)) sum += v, ++count;
-      }
-      if (count == 0) continue;
-      const double share = sum * sum / count / total;
-      const double score = share * share / (static_cast<double>(count) / n);
-      if (score > best_score) best_score = score, best_name = name;
-    }
-    if (best_name.empty()) continue;
-    Unexplained u;
-    u.metric = InfoOf(d.metrics[k]).name;
-    u.unit = InfoOf(d.metrics[k]).unit;
-    u.where = best_name;
-    // Size and form: weighted least squares of the residual on 1, D, D² (one at a time).
-    double sw = 0, swr = 0, chi2 = 0, max_d = 0;
-    double s[3] = {0, 0, 0}, sr[3] = {0, 0, 0};
-    std::vector<int> points;
-    for (int c : groups[best_name]) {
-      const size_t o = static_cast<size_t>(c) * kk + k;
-      if (!m.valid(o) || !std::isfinite(mu[o])) continue;
-      u.cells.push_back(c);
-      const double w = 1.0 / (m.noise(o) * m.noise(o)), r = m.y(o) - mu[o];
-      const double dd = d.cells[c].distance_m;
-      const double f[3] = {1.0, dd, dd * dd};
-      for (int j = 0; j < 3; ++j) s[j] += w * f[j] * f[j], sr[j] += w * f[j] * r;
-      sw += w, swr += w * r;
-      chi2 += z[o] * z[o];
-      max_d = std::max(max_d, dd);
-      if (!pe.point.empty() &&
-          std::find(points.begin(), points.end(), pe.point[c]) == points.end())
-        points.push_back(pe.point[c]);
-    }
-    u.size = sw > 0 ? swr / sw : NAN;
-    // Its standard error: the recordings of one test point share its placement scatter.
-    {
-      std::map<int, double> tau_sum;
-      double var = 0, wsum = 0;
-      for (int c : u.cells) {
-        const size_t o = static_cast<size_t>(c) * kk + k;
-        const double w = 1.0 / (m.noise(o) * m.noise(o));
-        var += w * w * m.replicate_noise(o) * m.replicate_noise(o);
-        tau_sum[pe.point.empty() ? -1 - c : pe.point[c]] += w * m.placement(o);
-        wsum += w;
-      }
-      for (const auto& [t, v] : tau_sum) var += v * v;
-      u.size_se = wsum > 0 ? std::sqrt(var) / wsum : NAN;
-    }
-    u.chi2 = chi2;
-    u.df = static_cast<int>(u.cells.size());
-    u.p_value = ChiSquareSurvival(chi2, u.df);
-    u.share_pct = 100 * chi2 / total;
-    const char* forms[3] = {"constant", "∝ D", "∝ D²"};
-    int best = 0;
-    double best_gain = -1;
-    for (int j = 0; j < 3; ++j) {
-      const double gain = s[j] > 0 ? sr[j] * sr[j] / s[j] : 0;  // Σw·r² explained
-      if (gain > best_gain) best_gain = gain, best = j;
-    }
-    u.form = points.size() == 1 ? "one test point" : forms[best];
-    const double coef = s[best] > 0 ? sr[best] / s[best] : 0;
-    u.size_at_max = coef * (best == 0 ? 1.0 : best == 1 ? max_d : max_d * max_d);
-    out.push_back(u);
-  }
-  std::sort(out.begin(), out.end(),
-            [](const Unexplained& a, const Unexplained& b) { return a.chi2 > b.chi2; });
-  return out;
 }
 
 }  // namespace depthbias::gap

@@ -1,6 +1,5 @@
 #pragma once
-// The nested cross-validation of the diagnosis (diagnose.h, step 4) and the description of what
-// no registered effect explains (step 5, open world).
+// The nested cross-validation of the diagnosis (diagnose.h, step 4).
 
 #include <vector>
 
@@ -16,12 +15,6 @@ namespace depthbias::gap {
 Nested RunNested(const Design& design, const Simulations& sims, const sim::SimParams& base,
                  const DiagnoseParams& params, const std::vector<int>& fold, int num_folds,
                  const GapModel& full);
-
-// The rest of the gap after a model (mu: its prediction of every observation): for each metric
-// whose Σz² is significant (χ², p < alpha / metrics), the factor cells its mean departure is most
-// concentrated in, its size there and its form in distance.
-std::vector<Unexplained> DescribeRest(const GapModel& model, const std::vector<double>& mu,
-                                      const PlacementEstimate& placement, double alpha);
 
 // The cells of `design` marked in `cells`, scenarios and metrics kept.
 Design Subset(const Design& design, const std::vector<char>& cells);

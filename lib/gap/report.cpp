@@ -139,6 +139,10 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
     w.EndArray();
     w.Number("deviance_calibrated", f.deviance_calibrated);
     w.Number("deviance_selected", f.deviance_selected).Bool("simulated", f.simulated);
+    w.Number("simulated_calibrated_sq", f.simulated_calibrated_sq);
+    w.BeginArray("effect_gain_simulated");
+    for (double g : f.effect_gain_simulated) w.Number(g);
+    w.EndArray();
     w.EndObject();
   }
   w.EndArray();
@@ -173,7 +177,7 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
     w.Number("size", u.size).Number("size_se", u.size_se).String("unit", u.unit);
     w.String("form", u.form).Number("size_at_far_end", u.size_at_max);
     w.Number("share_pct", u.share_pct).Number("chi2", u.chi2).Integer("cells", u.df);
-    w.Number("p_value", u.p_value);
+    w.Number("p_value", u.p_value).Bool("beyond_placement_law", u.beyond_placement_law);
     w.BeginArray("bags");
     for (int c : u.cells) w.String(r.design.bag[c]);
     w.EndArray().EndObject();
@@ -225,6 +229,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   w.Number("tau_logit_p", p.fit.tau_logit_p).Number("confounded_r", p.confounded_r);
   w.Number("absorb_r", p.absorb_r).Number("alpha", p.alpha);
   w.Number("min_effect_shrink_pct", p.min_effect_shrink_pct);
+  w.Number("min_own_shrink_pct", p.min_own_shrink_pct);
   w.Integer("simulations", r.simulations);
   w.BeginArray("candidates");
   for (const auto& c : r.candidates) w.String(c.effect);

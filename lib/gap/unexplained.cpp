@@ -1,0 +1,364 @@
+#include "gap/unexplained.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <random>
+#include <sstream>
+
+#include "gap/localize.h"
+#include "gap/select.h"
+
+namespace depthbias::gap {
+namespace {
+
+std::string Num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string PointName(const PlacementEstimate& pe, int t) {
+  return "test point " + pe.point_light[t] + " " + Num(pe.point_distance_m[t]) + " m " +
+         Num(pe.point_angle_deg[t]) + "°";
+}
+
+// The candidate groups of cells: every level of a factor and of a pair of factors that holds
+// more than one test point, in the order of their names. A group inside one test point is left
+// out: permuting test points as wholes leaves its score as it is, so it could never be beyond
+// chance and would only hide the others (a test point is judged against the placement law).
+struct Groups {
+  std::vector<std::string> name;
+  std::vector<std::vector<int>> cells;
+};
+
+Groups MakeGroups(const Design& d, const PlacementEstimate& pe) {
+  std::map<std::string, std::vector<int>> groups;
+  for (int c = 0; c < d.num_cells(); ++c)
+    for (int f = 0; f < 5; ++f) {
+      groups[LevelName(d.cells[c], f)].push_back(c);
+      for (int g = f + 1; g < 5; ++g)
+        groups[LevelName(d.cells[c], f) + " × " + LevelName(d.cells[c], g)].push_back(c);
+    }
+  Groups out;
+  for (auto& [name, cells] : groups) {
+    bool several = pe.point.empty() && cells.size() > 1;
+    for (size_t i = 1; i < cells.size() && !pe.point.empty(); ++i)
+      several = several || pe.point[cells[i]] != pe.point[cells[0]];
+    if (!several) continue;
+    out.name.push_back(name);
+    out.cells.push_back(std::move(cells));
+  }
+  return out;
+}
+
+// The group whose mean departure carries the most of metric k's Σz² for its size:
+// (share of Σz² its mean explains)² / (its share of the cells). Its score; its index in *best.
+double BestScore(const Groups& g, const std::vector<double>& z, int kk, int k, int* best) {
+  double total = 0;
+  int n = 0;
+  for (size_t o = static_cast<size_t>(k); o < z.size(); o += kk)
+    if (std::isfinite(z[o])) total += z[o] * z[o], ++n;
+  *best = -1;
+  if (n == 0 || !(total > 0)) return 0;
+  double best_score = 0;
+  for (size_t i = 0; i < g.cells.size(); ++i) {
+    double sum = 0;
+    int count = 0;
+    for (int c : g.cells[i]) {
+      const double v = z[static_cast<size_t>(c) * kk + k];
+      if (std::isfinite(v)) sum += v, ++count;
+    }
+    if (count == 0) continue;
+    const double share = sum * sum / count / total;
+    const double score = share * share / (static_cast<double>(count) / n);
+    if (score > best_score) best_score = score, *best = static_cast<int>(i);
+  }
+  return best_score;
+}
+
+// Test points as blocks of slots (a preset and emitter each): [block][slot] → cell or −1.
+// Without placement every cell is its own block.
+std::vector<std::vector<int>> MakeBlocks(const Design& d, const PlacementEstimate& pe) {
+  std::vector<std::vector<int>> blocks;
+  if (pe.point.empty()) {
+    for (int c = 0; c < d.num_cells(); ++c) blocks.push_back({c});
+    return blocks;
+  }
+  std::map<std::string, int> slots;
+  for (int c = 0; c < d.num_cells(); ++c)
+    slots.emplace(d.cells[c].preset + (d.cells[c].emitter_on ? "/on" : "/off"),
+                  static_cast<int>(slots.size()));
+  blocks.assign(pe.num_points, std::vector<int>(slots.size(), -1));
+  for (int c = 0; c < d.num_cells(); ++c)
+    blocks[pe.point[c]][slots.at(d.cells[c].preset + (d.cells[c].emitter_on ? "/on" : "/off"))] =
+        c;
+  return blocks;
+}
+
+// Size, standard error and form of the rest of metric k over `group_cells`.
+Unexplained Describe(const GapModel& m, const std::vector<double>& mu,
+                     const PlacementEstimate& pe, const std::vector<double>& z, int k,
+                     const std::string& where, const std::vector<int>& group_cells,
+                     double total, double p_value) {
+  const Design& d = m.design();
+  const int kk = d.num_metrics();
+  Unexplained u;
+  u.metric = InfoOf(d.metrics[k]).name;
+  u.unit = InfoOf(d.metrics[k]).unit;
+  u.where = where;
+  // Size and form: weighted least squares of the residual on 1, D, D² (one at a time).
+  double sw = 0, swr = 0, chi2 = 0, max_d = 0;
+  double s[3] = {0, 0, 0}, sr[3] = {0, 0, 0};
+  std::vector<int> points;
+  for (int c : group_cells) {
+    const size_t o = static_cast<size_t>(c) * kk + k;
+    if (!m.valid(o) || !std::isfinite(mu[o])) continue;
+    u.cells.push_back(c);
+    const double w = 1.0 / (m.noise(o) * m.noise(o)), r = m.y(o) - mu[o];
+    const double dd = d.cells[c].distance_m;
+    const double f[3] = {1.0, dd, dd * dd};
+    for (int j = 0; j < 3; ++j) s[j] += w * f[j] * f[j], sr[j] += w * f[j] * r;
+    sw += w, swr += w * r;
+    chi2 += z[o] * z[o];
+    max_d = std::max(max_d, dd);
+    if (!pe.point.empty() &&
+        std::find(points.begin(), points.end(), pe.point[c]) == points.end())
+      points.push_back(pe.point[c]);
+  }
+  u.size = sw > 0 ? swr / sw : NAN;
+  // Its standard error: the recordings of one test point share its placement scatter.
+  {
+    std::map<int, double> tau_sum;
+    double var = 0, wsum = 0;
+    for (int c : u.cells) {
+      const size_t o = static_cast<size_t>(c) * kk + k;
+      const double w = 1.0 / (m.noise(o) * m.noise(o));
+      var += w * w * m.replicate_noise(o) * m.replicate_noise(o);
+      tau_sum[pe.point.empty() ? -1 - c : pe.point[c]] += w * m.placement(o);
+      wsum += w;
+    }
+    for (const auto& [t, v] : tau_sum) var += v * v;
+    u.size_se = wsum > 0 ? std::sqrt(var) / wsum : NAN;
+  }
+  u.chi2 = chi2;
+  u.df = static_cast<int>(u.cells.size());
+  u.p_value = p_value;
+  u.share_pct = 100 * chi2 / total;
+  const char* forms[3] = {"constant", "∝ D", "∝ D²"};
+  int best = 0;
+  double best_gain = -1;
+  for (int j = 0; j < 3; ++j) {
+    const double gain = s[j] > 0 ? sr[j] * sr[j] / s[j] : 0;  // Σw·r² explained
+    if (gain > best_gain) best_gain = gain, best = j;
+  }
+  u.form = points.size() == 1 ? "one test point" : forms[best];
+  const double coef = s[best] > 0 ? sr[best] / s[best] : 0;
+  u.size_at_max = coef * (best == 0 ? 1.0 : best == 1 ? max_d : max_d * max_d);
+  return u;
+}
+
+// The test point of the other light at the same distance and angle, or −1.
+int Partner(const PlacementEstimate& pe, int t) {
+  for (int q = 0; q < pe.num_points; ++q)
+    if (q != t && pe.point_light[q] != pe.point_light[t] &&
+        pe.point_distance_m[q] == pe.point_distance_m[t] &&
+        pe.point_angle_deg[q] == pe.point_angle_deg[t])
+      return q;
+  return -1;
+}
+
+// Test points of t's light and distance (t included).
+int RowSize(const PlacementEstimate& pe, int t) {
+  int n = 0;
+  for (int q = 0; q < pe.num_points; ++q)
+    n += pe.point_light[q] == pe.point_light[t] &&
+         pe.point_distance_m[q] == pe.point_distance_m[t];
+  return n;
+}
+
+// Per test point: the mean residual of its recordings about the model (metric k) minus the
+// mean of the other test points' of its light and distance (NaN without others or residuals).
+std::vector<double> OwnDepartures(const GapModel& m, const std::vector<double>& mu,
+                                  const PlacementEstimate& pe, int k) {
+  const Design& d = m.design();
+  const int kk = d.num_metrics();
+  std::vector<double> sum(pe.num_points, 0.0), mean(pe.num_points, NAN);
+  std::vector<int> count(pe.num_points, 0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    const size_t o = static_cast<size_t>(c) * kk + k;
+    if (!m.valid(o) || !std::isfinite(mu[o])) continue;
+    sum[pe.point[c]] += m.y(o) - mu[o];
+    ++count[pe.point[c]];
+  }
+  for (int t = 0; t < pe.num_points; ++t)
+    if (count[t] > 0) mean[t] = sum[t] / count[t];
+  std::vector<double> own(pe.num_points, NAN);
+  for (int t = 0; t < pe.num_points; ++t) {
+    double others = 0;
+    int n = 0;
+    for (int q = 0; q < pe.num_points; ++q)
+      if (q != t && std::isfinite(mean[q]) && pe.point_light[q] == pe.point_light[t] &&
+          pe.point_distance_m[q] == pe.point_distance_m[t])
+        others += mean[q], ++n;
+    if (n > 0 && std::isfinite(mean[t])) own[t] = mean[t] - others / n;
+  }
+  return own;
+}
+
+// The largest share of the weighted residual of metric k that one law in distance (constant,
+// ∝ D, ∝ D²) explains over the whole table: max_j (Σ w·f_j·r)² / Σ w·f_j², against the same with
+// signs drawn for test points as wholes. Its p-value.
+double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
+                        const std::vector<std::vector<int>>& blocks, const RestParams& params) {
+  const Design& d = m.design();
+  const int kk = d.num_metrics();
+  // Per test point and law: Σ w·f·r and Σ w·f².
+  const size_t nb = blocks.size();
+  std::vector<std::array<double, 3>> wfr(nb, {0, 0, 0});
+  std::array<double, 3> wff = {0, 0, 0};
+  for (size_t b = 0; b < nb; ++b)
+    for (int c : blocks[b]) {
+      if (c < 0) continue;
+      const size_t o = static_cast<size_t>(c) * kk + k;
+      if (!m.valid(o) || !std::isfinite(mu[o])) continue;
+      const double w = 1.0 / (m.noise(o) * m.noise(o)), r = m.y(o) - mu[o];
+      const double dd = d.cells[c].distance_m, f[3] = {1.0, dd, dd * dd};
+      for (int j = 0; j < 3; ++j) wfr[b][j] += w * f[j] * r, wff[j] += w * f[j] * f[j];
+    }
+  auto stat = [&](const std::vector<int>& sign) {
+    double best = 0;
+    for (int j = 0; j < 3; ++j) {
+      double sum = 0;
+      for (size_t b = 0; b < nb; ++b) sum += sign[b] * wfr[b][j];
+      if (wff[j] > 0) best = std::max(best, sum * sum / wff[j]);
+    }
+    return best;
+  };
+  const double observed = stat(std::vector<int>(nb, 1));
+  std::mt19937_64 rng(params.seed + 1);
+  std::vector<int> sign(nb);
+  int as_large = 0;
+  for (int i = 0; i < params.permutations; ++i) {
+    for (size_t b = 0; b < nb; ++b) sign[b] = rng() % 2 ? 1 : -1;
+    as_large += stat(sign) >= observed;
+  }
+  return (1.0 + as_large) / (1.0 + params.permutations);
+}
+
+}  // namespace
+
+std::string LevelName(const sim::Cell& c, int factor) {
+  switch (factor) {
+    case 0: return "distance " + Num(c.distance_m) + " m";
+    case 1: return "angle " + Num(c.angle_deg) + "°";
+    case 2: return "preset " + c.preset;
+    case 3: return "light " + c.light;
+    default: return std::string("emitter ") + (c.emitter_on ? "on" : "off");
+  }
+}
+
+std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<double>& mu,
+                                      const PlacementEstimate& pe, const RestParams& params) {
+  std::vector<Unexplained> out;
+  const Design& d = m.design();
+  const int kk = d.num_metrics();
+  const std::vector<double> z = Scaled(m, mu);
+  const std::vector<std::vector<int>> blocks = MakeBlocks(d, pe);
+  // The permuted tables, the same for every metric: test points permuted as wholes (each
+  // recording to the same preset and emitter slot of another test point).
+  std::mt19937_64 rng(params.seed);
+  std::vector<std::vector<int>> perms(params.permutations);
+  for (auto& p : perms) {
+    p.resize(blocks.size());
+    for (size_t j = 0; j < p.size(); ++j) p[j] = static_cast<int>(j);
+    for (size_t j = p.size(); j > 1; --j) std::swap(p[j - 1], p[rng() % j]);  // Fisher–Yates
+  }
+  const Groups groups = MakeGroups(d, pe);
+  std::vector<double> zp(z.size());
+  for (int k = 0; k < kk; ++k) {
+    double total = 0;
+    int n = 0;
+    for (int c = 0; c < d.num_cells(); ++c) {
+      const double v = z[static_cast<size_t>(c) * kk + k];
+      if (std::isfinite(v)) total += v * v, ++n;
+    }
+    if (n == 0 || ChiSquareSurvival(total, n) >= params.alpha / kk) continue;
+    int best = -1;
+    const double observed = BestScore(groups, z, kk, k, &best);
+    if (best < 0) continue;
+    int as_large = 0;
+    for (const auto& p : perms) {
+      std::fill(zp.begin(), zp.end(), NAN);
+      for (size_t b = 0; b < blocks.size(); ++b)
+        for (size_t slot = 0; slot < blocks[b].size(); ++slot) {
+          const int to = blocks[b][slot], from = blocks[p[b]][slot];
+          if (to >= 0 && from >= 0)
+            zp[static_cast<size_t>(to) * kk + k] = z[static_cast<size_t>(from) * kk + k];
+        }
+      int ignored = -1;
+      as_large += BestScore(groups, zp, kk, k, &ignored) >= observed;
+    }
+    const double p_value = (1.0 + as_large) / (1.0 + params.permutations);
+    if (p_value < params.alpha / kk) {
+      out.push_back(
+          Describe(m, mu, pe, z, k, groups.name[best], groups.cells[best], total, p_value));
+      continue;
+    }
+    // Permutations keep what the whole table shares. In the median bias a departure of every
+    // test point, constant or growing with distance, is tested by signs drawn for test points
+    // as wholes: a placement is as likely short as long.
+    if (std::string(InfoOf(d.metrics[k]).name) != "median_bias_m" || pe.empty()) continue;
+    const double p_shared = SharedDepartureP(m, mu, k, blocks, params);
+    if (p_shared >= params.alpha / kk) continue;
+    std::vector<int> all(d.num_cells());
+    for (int c = 0; c < d.num_cells(); ++c) all[c] = c;
+    out.push_back(Describe(m, mu, pe, z, k, "every recording", all, total, p_shared));
+  }
+  // The test points placed beyond the placement law, in the median bias.
+  for (int k = 0; k < kk && !pe.empty(); ++k) {
+    if (std::string(InfoOf(d.metrics[k]).name) != "median_bias_m") continue;
+    double total = 0;
+    for (size_t o = static_cast<size_t>(k); o < z.size(); o += kk)
+      if (std::isfinite(z[o])) total += z[o] * z[o];
+    const std::vector<double> own = OwnDepartures(m, mu, pe, k);
+    for (int t = 0; t < pe.num_points; ++t) {
+      if (!pe.flagged[k][t] || !std::isfinite(own[t])) continue;
+      // With two lights the estimate sees a test point only against its partner of the other
+      // light (light × distance and distance × angle are fixed effects): a misplaced point and
+      // its partner are flagged together, the other way. The one whose recordings depart from
+      // the other test points of its light and distance is the misplaced one.
+      const int partner = Partner(pe, t);
+      if (partner >= 0 && pe.flagged[k][partner] &&
+          pe.departure[k][t] * pe.departure[k][partner] < 0 && std::isfinite(own[partner]) &&
+          std::fabs(own[t]) < std::fabs(own[partner]))
+        continue;
+      const std::string where = PointName(pe, t);
+      bool listed = false;
+      for (const Unexplained& u : out)
+        listed = listed || (u.metric == "median_bias_m" && u.where == where);
+      if (listed) continue;
+      std::vector<int> cells;
+      for (int c = 0; c < d.num_cells(); ++c)
+        if (pe.point[c] == t) cells.push_back(c);
+      const double dz = std::fabs(pe.departure_z[k][t]);
+      Unexplained u = Describe(m, mu, pe, z, k, where, cells, total,
+                               std::erfc(dz / std::sqrt(2.0)));
+      // Its size: how far it reads from the other test points of its light and distance, with
+      // the placement law's scatter of the difference as its standard error.
+      const double law = pe.Law(k, d.metrics[k], pe.point_distance_m[t]);
+      const int others = RowSize(pe, t) - 1;
+      u.size = u.size_at_max = own[t];
+      u.size_se = others > 0 ? law * std::sqrt(1.0 + 1.0 / others) : NAN;
+      u.form = "one test point";
+      u.beyond_placement_law = true;
+      out.push_back(u);
+    }
+  }
+  std::sort(out.begin(), out.end(),
+            [](const Unexplained& a, const Unexplained& b) { return a.chi2 > b.chi2; });
+  return out;
+}
+
+}  // namespace depthbias::gap

@@ -1,0 +1,42 @@
+#pragma once
+// What no registered effect explains (diagnose.h, step 5, open world): where the rest of the gap
+// lies, its size and its form, judged against what noise and placement alone would give.
+
+#include <string>
+#include <vector>
+
+#include "gap/diagnose.h"
+#include "gap/fit.h"
+#include "gap/placement.h"
+
+namespace depthbias::gap {
+
+// A level of one factor of a cell as text: 0 distance ("distance 16 m"), 1 angle, 2 preset,
+// 3 light, 4 emitter.
+std::string LevelName(const sim::Cell& cell, int factor);
+
+struct RestParams {
+  double alpha = 0.05;      // a metric's rest is described if p < alpha / metrics
+  int permutations = 999;   // permuted tables
+  std::uint64_t seed = 20261124;  // of the permutations (the result is reproducible)
+};
+
+// The rest of the gap after a model (mu: its prediction of every observation). For each metric
+// whose Σz² is significant (χ²), the group of cells (a level of a factor or of a pair of
+// factors, holding several test points) whose mean departure carries the most of the metric's
+// Σz² for its size is described when it is beyond chance: its score is compared with the best
+// score of tables whose test points were permuted as wholes (each recording to the same preset
+// and emitter slot of another test point), so that heavy-tailed, skewed or bounded residuals
+// and the placement a test point's recordings share are the reference, not a normal law.
+// Permutations keep what the whole table shares; in the median bias, a departure of every test
+// point (constant, ∝ D or ∝ D²) is tested against signs drawn for test points as wholes (a
+// placement is as likely short as long) and described as "every recording".
+// Test points the placement estimate flags in the median bias (a panel set off by more than its
+// law allows) are listed too, as one test point each; of a flagged pair of partners of the two
+// lights, the one that departs from the other test points of its light and distance. Sorted by
+// χ², largest first.
+std::vector<Unexplained> DescribeRest(const GapModel& model, const std::vector<double>& mu,
+                                      const PlacementEstimate& placement,
+                                      const RestParams& params);
+
+}  // namespace depthbias::gap
