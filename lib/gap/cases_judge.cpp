@@ -195,6 +195,25 @@ void RightRows(const OutsideEffect& o, const std::vector<records::PanelMetrics>&
   }
 }
 
+// A far over-read is a law over the whole table: an entry of `unexplained` that gives the median
+// bias's law (form ∝ D², its value at the far end within 20 % of the injected one, criterion 2)
+// answers it wherever its cells lie.
+bool GivesTheLaw(const Json& entry, const OutsideEffect& o,
+                 const std::vector<records::PanelMetrics>& rows) {
+  if (o.kind != OutsideEffect::kFarOverRead || entry.type != Json::kObject) return false;
+  const Json* metric = entry.Find("metric");
+  const Json* form = entry.Find("form");
+  const Json* far_end = entry.Find("size_at_far_end");
+  if (!metric || metric->type != Json::kString || metric->text != "median_bias_m" || !form ||
+      form->type != Json::kString || form->text != "∝ D²" || !far_end ||
+      far_end->type != Json::kNumber)
+    return false;
+  double far = 0;
+  for (const auto& r : rows) far = std::max(far, r.distance_m);
+  const double truth = o.coef * (far / 10) * (far / 10);
+  return truth != 0 && std::fabs(far_end->number - truth) <= 0.2 * std::fabs(truth);
+}
+
 // The injected value of a parameter in a scenario ("light/preset"), or the neutral value.
 struct Truth {
   double value = NAN;
@@ -366,8 +385,22 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   if (truth.outside.kind != OutsideEffect::kNone) {
     std::set<size_t> allowed, needed;
     RightRows(truth.outside, rows, &allowed, &needed);
-    bool inside = !named.empty(), hits = false;
-    for (size_t i : named) {
+    // The law over the whole table, if given; the other entries must name the right cells.
+    bool law = false;
+    std::set<size_t> rest = named;
+    if (u && u->type == Json::kArray) {
+      rest.clear();
+      for (const Json& entry : u->items) {
+        if (GivesTheLaw(entry, truth.outside, rows)) {
+          law = true;
+          continue;
+        }
+        const std::set<size_t> n = NamedRows(entry, rows);
+        rest.insert(n.begin(), n.end());
+      }
+    }
+    bool inside = law || !rest.empty(), hits = law;
+    for (size_t i : rest) {
       inside = inside && allowed.count(i);
       hits = hits || needed.count(i);
     }
