@@ -168,12 +168,9 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidualAndTheEmitterMismatchApart) {
               std::hypot(n.scale[0] * 1.44, q / std::sqrt(12.0)), 1e-12);
 }
 
-// The placement estimate of a table whose simulation reads every metric but the median bias as
-// the real one (and the median as 0): the median bias is the only gap.
-PlacementEstimate PlacementOf(const std::vector<records::PanelMetrics>& rows) {
-  Design d;
-  std::string why;
-  if (!BuildDesign(rows, &d, &why)) throw std::runtime_error(why);
+// A simulation that reads every metric but the median bias as the real one (and the median bias
+// as 0): the median bias is the only gap.
+Simulations MedianBiasOnly(const Design& d) {
   Simulations s;
   s.metrics = d.metrics;
   s.base.assign(d.real.size(), 0.0);
@@ -182,6 +179,27 @@ PlacementEstimate PlacementOf(const std::vector<records::PanelMetrics>& rows) {
     for (int k = 1; k < d.num_metrics(); ++k)
       s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
   }
+  return s;
+}
+
+// The article's grid: 2 lights × 4 angles × 4 distances × 2 presets × emitter off/on.
+std::vector<records::PanelMetrics> ArticleGrid() {
+  std::vector<records::PanelMetrics> rows;
+  for (const char* light : {"daylight", "sunset"})
+    for (double a : {0.0, 10.0, 20.0, 35.0})
+      for (double dist : {4.0, 8.0, 12.0, 16.0})
+        for (const char* preset : {"HA", "HD"})
+          for (const char* emitter : {"off", "on"})
+            rows.push_back(Row(dist, a, preset, emitter, light));
+  return rows;
+}
+
+// The placement estimate of a table against MedianBiasOnly.
+PlacementEstimate PlacementOf(const std::vector<records::PanelMetrics>& rows) {
+  Design d;
+  std::string why;
+  if (!BuildDesign(rows, &d, &why)) throw std::runtime_error(why);
+  const Simulations s = MedianBiasOnly(d);
   const NoiseEstimate n = EstimateNoise(d, s);
   return EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
 }
@@ -191,13 +209,7 @@ PlacementEstimate PlacementOf(const std::vector<records::PanelMetrics>& rows) {
 // noise of 5 mm; one test point set 3 m farther (eight times the law there). REML finds the law
 // within a factor of two at 16 m and flags that test point, reading far.
 TEST(Placement, RemlFindsTheScatterLawAndFlagsTheMisplacedPoint) {
-  std::vector<records::PanelMetrics> rows;
-  for (const char* light : {"daylight", "sunset"})
-    for (double a : {0.0, 10.0, 20.0, 35.0})
-      for (double dist : {4.0, 8.0, 12.0, 16.0})
-        for (const char* preset : {"HA", "HD"})
-          for (const char* emitter : {"off", "on"})
-            rows.push_back(Row(dist, a, preset, emitter, light));
+  std::vector<records::PanelMetrics> rows = ArticleGrid();
   std::mt19937 rng(7);
   std::normal_distribution<double> unit(0.0, 1.0);
   std::map<std::string, double> shift;
@@ -326,13 +338,7 @@ std::vector<Unexplained> RestOf(std::uint32_t seed,
                                 const std::function<double(const records::PanelMetrics&)>& add,
                                 std::vector<std::string>* flagged = nullptr,
                                 bool heavy_tailed = true) {
-  std::vector<records::PanelMetrics> rows;
-  for (const char* light : {"daylight", "sunset"})
-    for (double a : {0.0, 10.0, 20.0, 35.0})
-      for (double dist : {4.0, 8.0, 12.0, 16.0})
-        for (const char* preset : {"HA", "HD"})
-          for (const char* emitter : {"off", "on"})
-            rows.push_back(Row(dist, a, preset, emitter, light));
+  std::vector<records::PanelMetrics> rows = ArticleGrid();
   std::mt19937 rng(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
   std::student_t_distribution<double> heavy(3.0);
@@ -346,14 +352,7 @@ std::vector<Unexplained> RestOf(std::uint32_t seed,
   Design d;
   std::string why;
   if (!BuildDesign(rows, &d, &why)) throw std::runtime_error(why);
-  Simulations s;
-  s.metrics = d.metrics;
-  s.base.assign(d.real.size(), 0.0);
-  for (int c = 0; c < d.num_cells(); ++c) {
-    s.depth_m.push_back(d.cells[c].distance_m);
-    for (int k = 1; k < d.num_metrics(); ++k)
-      s.base[c * d.num_metrics() + k] = d.real[c * d.num_metrics() + k];
-  }
+  const Simulations s = MedianBiasOnly(d);
   const NoiseEstimate n = EstimateNoise(d, s);
   const PlacementEstimate pe =
       EstimatePlacement(d, s, n, std::vector<char>(d.num_cells(), 1), 0.05);
