@@ -5,22 +5,8 @@
 #include <limits>
 
 namespace depthbias::camera {
-namespace {
-
-constexpr double kBinPx = 0.001;
-constexpr int kBins = 4000;  // up to 4 px
-
-}  // namespace
 
 TemporalNoise::TemporalNoise() : bins_(kBins, 0) {}
-
-void TemporalNoise::Add(double delta_disparity_px) {
-  if (std::isnan(delta_disparity_px)) return;
-  const double a = std::fabs(delta_disparity_px) / kBinPx;
-  const int bin = a >= kBins - 1 ? kBins - 1 : static_cast<int>(a);
-  ++bins_[static_cast<size_t>(bin)];
-  ++pairs_;
-}
 
 double TemporalNoise::SigmaPx() const {
   if (pairs_ == 0) return std::numeric_limits<double>::quiet_NaN();

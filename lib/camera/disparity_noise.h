@@ -9,6 +9,8 @@
 // The one estimator of σ_d: the metrics kernel measures it on the panel (the metrics CSV's
 // sigma_d_px, lib/metrics), the obstacle detector at its obstacles (lib/detect/noise.h).
 
+#include <cmath>
+#include <cstddef>
 #include <vector>
 
 namespace depthbias::camera {
@@ -19,13 +21,22 @@ class TemporalNoise {
  public:
   TemporalNoise();
   // Δd = f·B·(1/Z − 1/Z_prev) of one pixel valid in two consecutive frames [px]; NaN ignored.
-  void Add(double delta_disparity_px);
+  // Inline: the metrics kernel calls it for every pixel of every frame.
+  void Add(double delta_disparity_px) {
+    if (std::isnan(delta_disparity_px)) return;
+    const double a = std::fabs(delta_disparity_px) / kBinPx;
+    const int bin = a >= kBins - 1 ? kBins - 1 : static_cast<int>(a);
+    ++bins_[static_cast<std::size_t>(bin)];
+    ++pairs_;
+  }
   long long pairs() const { return pairs_; }
   // σ_d = RMS(Δd within 5·1.4826·median|Δd|)/√2 [px]; NaN without pairs.
   double SigmaPx() const;
   void Clear();
 
  private:
+  static constexpr double kBinPx = 0.001;
+  static constexpr int kBins = 4000;  // up to 4 px
   std::vector<long long> bins_;
   long long pairs_ = 0;
 };

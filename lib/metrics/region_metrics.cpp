@@ -10,25 +10,43 @@ namespace depthbias::metrics {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr std::size_t kDepthBins = 1u << 16;  // every 16-bit depth count
 constexpr std::size_t kRangeBins = 1u << 17;  // range up to 131071 depth units
 
-// Value of the histogram at rank (0-based) among its total.
-std::size_t RankValue(const std::vector<std::uint64_t>& hist, std::uint64_t rank) {
+// Value of the histogram at rank (0-based) among its total: hist[i] counts value lo + i − 1
+// ([0] is not a value's).
+std::size_t RankValue(const std::vector<std::uint64_t>& hist, std::size_t lo,
+                      std::uint64_t rank) {
   std::uint64_t seen = 0;
-  for (std::size_t i = 0; i < hist.size(); ++i) {
+  for (std::size_t i = 1; i < hist.size(); ++i) {
     seen += hist[i];
-    if (seen > rank) return i;
+    if (seen > rank) return lo + i - 1;
   }
-  return hist.size() - 1;
+  return lo + hist.size() - 2;
 }
 
 // Median of a histogram of integers: the mean of the two middle values for an even count.
-double HistMedian(const std::vector<std::uint64_t>& hist, std::uint64_t total) {
+double HistMedian(const std::vector<std::uint64_t>& hist, std::size_t lo, std::uint64_t total) {
   if (total == 0) return records::PanelMetrics::kMissing;
-  const std::size_t a = RankValue(hist, (total - 1) / 2);
-  const std::size_t b = RankValue(hist, total / 2);
+  const std::size_t a = RankValue(hist, lo, (total - 1) / 2);
+  const std::size_t b = RankValue(hist, lo, total / 2);
   return 0.5 * (static_cast<double>(a) + static_cast<double>(b));
+}
+
+// std::lround of a product c·|ray| >= 0 (exact: a float plus ½ is exact in double).
+inline std::size_t RoundRange(float x) {
+  return static_cast<std::size_t>(static_cast<long>(static_cast<double>(x) + 0.5));
+}
+
+// The same vector of bins over the values [new_lo, new_hi] instead of those from lo (bin 0
+// kept in place).
+void Rebase(std::vector<std::uint64_t>* bins, std::size_t lo, std::size_t new_lo,
+            std::size_t new_hi) {
+  std::vector<std::uint64_t> out(new_hi - new_lo + 2, 0);
+  if (!bins->empty()) {
+    out[0] = (*bins)[0];
+    std::copy(bins->begin() + 1, bins->end(), out.begin() + 1 + (lo - new_lo));
+  }
+  bins->swap(out);
 }
 
 // Median of values: the mean of the two middle ones for an even count.
@@ -63,9 +81,7 @@ RegionMetrics::RegionMetrics(const camera::Intrinsics& intrinsics, const PanelRe
                              const KernelParams& params)
     : intrinsics_(intrinsics),
       params_(params),
-      pixels_(region.pixels),
-      depth_hist_(kDepthBins, 0),
-      range_hist_(kRangeBins, 0) {
+      pixels_(region.pixels) {
   std::string why;
   if (!params.IsValid(&why)) throw std::invalid_argument("metrics kernel: " + why);
   if (region.width != intrinsics.width || region.height != intrinsics.height)
@@ -79,8 +95,15 @@ RegionMetrics::RegionMetrics(const camera::Intrinsics& intrinsics, const PanelRe
     rays_.emplace_back(r.x(), r.y(), 1.0);
     range_per_count_.push_back(static_cast<float>(std::sqrt(1.0 + r.squaredNorm())));
   }
+  if (!range_per_count_.empty()) {
+    const auto [lo, hi] = std::minmax_element(range_per_count_.begin(), range_per_count_.end());
+    min_range_per_count_ = *lo;
+    max_range_per_count_ = *hi;
+  }
   sums_.resize(pixels_.size());
   gathered_.resize(pixels_.size());
+  valid_.resize(pixels_.size());
+  pairs_.resize(pixels_.size());
   previous_.resize(pixels_.size(), 0);
 }
 
@@ -90,43 +113,107 @@ void RegionMetrics::AddFrame(const records::DepthFrame& frame) {
   AddRegionCounts(gathered_.data(), frame.depth_units_m);
 }
 
+void RegionMetrics::Cover(std::size_t c_lo, std::size_t c_hi, std::size_t r_lo,
+                          std::size_t r_hi) {
+  if (count_lo_ == 0 || c_lo < count_lo_ || c_hi > count_lo_ + terms_.size() - 2) {
+    const std::size_t lo = count_lo_ == 0 ? c_lo : std::min(c_lo, count_lo_);
+    const std::size_t hi = count_lo_ == 0 ? c_hi : std::max(c_hi, count_lo_ + terms_.size() - 2);
+    Rebase(&depth_hist_, count_lo_, lo, hi);
+    terms_.assign(hi - lo + 2, CountTerms{});
+    for (std::size_t c = lo; c <= hi; ++c) {
+      CountTerms& t = terms_[c - lo + 1];
+      t.z = static_cast<double>(c) * depth_units_m_;
+      t.z2 = t.z * t.z;
+      t.inv = 1.0 / t.z;
+      t.inv2 = t.inv * t.inv;
+      t.per_count = 1.0 / static_cast<double>(c);
+    }
+    count_lo_ = lo;
+  }
+  if (range_lo_ == 0 || r_lo < range_lo_ || r_hi > range_lo_ + range_hist_.size() - 2) {
+    const std::size_t lo = range_lo_ == 0 ? r_lo : std::min(r_lo, range_lo_);
+    const std::size_t hi =
+        range_lo_ == 0 ? r_hi : std::max(r_hi, range_lo_ + range_hist_.size() - 2);
+    Rebase(&range_hist_, range_lo_, lo, hi);
+    range_lo_ = lo;
+  }
+}
+
 void RegionMetrics::AddRegionCounts(const std::uint16_t* counts, double units) {
   if (frames_ == 0) {
     depth_units_m_ = units;
   } else if (units != depth_units_m_) {
     mixed_units_ = true;
   }
+  const std::size_t n = pixels_.size();
+  // The frame's smallest and largest valid count (c − 1 wraps a hole to the largest).
+  std::uint16_t least_minus_1 = 0xFFFF, most = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    least_minus_1 = std::min<std::uint16_t>(least_minus_1, counts[k] - 1);
+    most = std::max(most, counts[k]);
+  }
+  const bool any = most > 0;
+  // A change of depth units is refused in Finish, which then uses none of the sums.
+  if (any && !mixed_units_) {
+    // Ranges lie between the extreme counts times the extreme |ray| (products and rounding
+    // are monotonic).
+    const std::size_t least = static_cast<std::size_t>(least_minus_1) + 1;
+    const std::size_t r_lo = std::min<std::size_t>(
+        kRangeBins - 1, RoundRange(static_cast<int>(least) * min_range_per_count_));
+    const std::size_t r_hi = std::min<std::size_t>(
+        kRangeBins - 1, RoundRange(static_cast<int>(most) * max_range_per_count_));
+    Cover(least, most, std::max<std::size_t>(r_lo, 1), r_hi);
+  }
+  // The frame's valid pixels, and those also valid in the frame before, listed without a
+  // branch (holes come and go at random: a branch per pixel would be mispredicted often).
+  std::uint32_t* const valid = valid_.data();
+  std::uint32_t* const pairs = pairs_.data();
+  std::size_t n_valid = 0, n_pairs = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool c = counts[k] != 0;
+    valid[n_valid] = static_cast<std::uint32_t>(k);
+    n_valid += c;
+    pairs[n_pairs] = static_cast<std::uint32_t>(k);
+    n_pairs += c & (previous_[k] != 0);
+  }
   // Temporal disparity noise: pixels valid in this frame and the one before (the first frame
-  // has none before it; a change of depth units is refused in Finish anyway).
+  // has none before it). Every count of the frame before is covered by terms_.
   if (frames_ > 0 && !mixed_units_) {
     const double fb_units = intrinsics_.fx * params_.baseline_m / units;  // f·B/Z = fb_units/c
-    for (std::size_t k = 0; k < pixels_.size(); ++k) {
-      const std::uint16_t c = counts[k], p = previous_[k];
-      if (c == 0 || p == 0) continue;
-      temporal_noise_.Add(fb_units * (1.0 / c - 1.0 / p));
+    const CountTerms* const terms = terms_.data();
+    const std::size_t base = count_lo_ - 1;
+    for (std::size_t j = 0; j < n_pairs; ++j) {
+      const std::size_t k = pairs[j];
+      temporal_noise_.Add(fb_units * (terms[counts[k] - base].per_count -
+                                      terms[previous_[k] - base].per_count));
     }
   }
-  std::copy(counts, counts + pixels_.size(), previous_.begin());
+  std::copy(counts, counts + n, previous_.begin());
   ++frames_;
-  bool any = false;
-  for (std::size_t k = 0; k < pixels_.size(); ++k) {
+  if (!any) return;
+  ++frames_with_depth_;
+  if (mixed_units_) return;
+  const CountTerms* const terms = terms_.data();
+  std::uint64_t* const depth_hist = depth_hist_.data();
+  std::uint64_t* const range_hist = range_hist_.data();
+  const float* const range_per_count = range_per_count_.data();
+  PixelSums* const sums = sums_.data();
+  const std::size_t c_base = count_lo_ - 1, r_base = range_lo_ - 1;
+  for (std::size_t j = 0; j < n_valid; ++j) {
+    const std::size_t k = valid[j];
     const std::uint16_t c = counts[k];
-    if (c == 0) continue;
-    any = true;
-    const double z = c * units;
-    const double inv = 1.0 / z;
-    PixelSums& s = sums_[k];
+    const CountTerms& ct = terms[c - c_base];
+    PixelSums& s = sums[k];
     ++s.n;
-    s.z += z;
-    s.z2 += z * z;
-    s.inv += inv;
-    s.inv2 += inv * inv;
-    ++depth_hist_[c];
-    const std::size_t r = std::min<std::size_t>(
-        kRangeBins - 1, static_cast<std::size_t>(std::lround(c * range_per_count_[k])));
-    ++range_hist_[r];
+    s.z += ct.z;
+    s.z2 += ct.z2;
+    s.inv += ct.inv;
+    s.inv2 += ct.inv2;
+    ++depth_hist[c - c_base];
+    const std::size_t r =
+        std::min<std::size_t>(kRangeBins - 1, RoundRange(c * range_per_count[k]));
+    ++range_hist[r - r_base];
   }
-  if (any) ++frames_with_depth_;
 }
 
 KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMetrics* m) const {
@@ -184,8 +271,8 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
     return res;
   }
   m->mean_m = sum_z / static_cast<double>(n);
-  m->median_m = HistMedian(depth_hist_, n) * depth_units_m_;
-  m->range_m = HistMedian(range_hist_, n) * depth_units_m_;
+  m->median_m = HistMedian(depth_hist_, count_lo_, n) * depth_units_m_;
+  m->range_m = HistMedian(range_hist_, range_lo_, n) * depth_units_m_;
   m->temporal_std_m = Median(std::move(temporal));
   res.noise_pairs = temporal_noise_.pairs();
   if (res.noise_pairs >= params_.min_noise_pairs) m->sigma_d_px = temporal_noise_.SigmaPx();

@@ -97,17 +97,33 @@ class RegionMetrics {
     std::uint32_t n = 0;
     double z = 0, z2 = 0, inv = 0, inv2 = 0;
   };
+  // What a sample of depth count c adds, computed once per count: z = c·units, z², 1/z, 1/z²,
+  // and 1/c (sigma_d_px).
+  struct CountTerms {
+    double z = 0, z2 = 0, inv = 0, inv2 = 0, per_count = 0;
+  };
+  // Makes the count tables and histograms cover the counts [c_lo, c_hi] (c_lo >= 1) and the
+  // ranges [r_lo, r_hi].
+  void Cover(std::size_t c_lo, std::size_t c_hi, std::size_t r_lo, std::size_t r_hi);
+
   camera::Intrinsics intrinsics_;
   KernelParams params_;
   std::vector<std::uint32_t> pixels_;
   std::vector<Eigen::Vector3d> rays_;  // (x/z, y/z, 1) per region pixel
   std::vector<float> range_per_count_;  // |ray| per region pixel
+  float min_range_per_count_ = 1.0f, max_range_per_count_ = 1.0f;
   std::vector<PixelSums> sums_;
   std::vector<std::uint16_t> gathered_;
   std::vector<std::uint16_t> previous_;  // the frame before's counts (sigma_d_px)
+  std::vector<std::uint32_t> valid_, pairs_;  // scratch: a frame's valid pixels, valid pairs
   camera::TemporalNoise temporal_noise_;
-  std::vector<std::uint64_t> depth_hist_;  // by depth count
-  std::vector<std::uint64_t> range_hist_;  // by range in depth units
+  // Histograms over the values seen so far: depth_hist_[i] counts depth count
+  // count_lo_ + i − 1, range_hist_[i] range (in depth units) range_lo_ + i − 1 ([0] unused).
+  // terms_ is indexed as depth_hist_.
+  std::size_t count_lo_ = 0, range_lo_ = 0;  // 0: nothing covered yet
+  std::vector<CountTerms> terms_;
+  std::vector<std::uint64_t> depth_hist_;
+  std::vector<std::uint64_t> range_hist_;
   double depth_units_m_ = 0.0;
   std::uint64_t frames_ = 0;
   std::uint64_t frames_with_depth_ = 0;
