@@ -23,12 +23,15 @@ RayTable::RayTable(const camera::Intrinsics& intrinsics) : intrinsics_(intrinsic
   }
 }
 
-double Plane::DepthOnRay(const Eigen::Vector3d& ray) const {
-  // n·(Z·r) + d = 0  →  Z = −d / (n·r).
-  const double nr = normal.dot(ray);
-  if (std::fabs(nr) < 1e-12) return std::numeric_limits<double>::quiet_NaN();
-  const double z = -offset_m / nr;
-  return z > 0 ? z : std::numeric_limits<double>::quiet_NaN();
+PixelNormalizer::PixelNormalizer(const camera::Intrinsics& intrinsics)
+    : intrinsics_(intrinsics), distorted_(!camera::IsDistortionZero(intrinsics)) {
+  if (distorted_) return;
+  x_.resize(static_cast<std::size_t>(std::max(intrinsics.width, 0)));
+  y_.resize(static_cast<std::size_t>(std::max(intrinsics.height, 0)));
+  for (int u = 0; u < intrinsics.width; ++u)
+    x_[static_cast<std::size_t>(u)] = camera::PixelToNormalized(intrinsics, {u, 0}).x();
+  for (int v = 0; v < intrinsics.height; ++v)
+    y_[static_cast<std::size_t>(v)] = camera::PixelToNormalized(intrinsics, {0, v}).y();
 }
 
 void PlaneMoments::Add(const Eigen::Vector3d& p, double w) {
@@ -62,14 +65,6 @@ std::array<Eigen::Vector3d, 4> PanelRectangle::Corners() const {
   const Eigen::Vector3d w = 0.5 * width_m * axis_width;
   const Eigen::Vector3d h = 0.5 * height_m * axis_up;
   return {center_m - w - h, center_m + w - h, center_m + w + h, center_m - w + h};
-}
-
-bool PanelRectangle::PlaneCoordinates(const Eigen::Vector3d& ray, Eigen::Vector2d* st) const {
-  const double z = plane.DepthOnRay(ray);
-  if (!std::isfinite(z)) return false;
-  const Eigen::Vector3d q = z * ray - center_m;
-  *st = {q.dot(axis_width), q.dot(axis_up)};
-  return true;
 }
 
 Eigen::Vector2d PixelFootprint(const camera::Intrinsics& in, const PanelRectangle& rect) {
@@ -112,12 +107,21 @@ void RobustExtent(std::vector<double> v, double max_gap, double* lo, double* hi)
 }
 
 void FinishRegion(PanelRegion* r) {
-  std::sort(r->pixels.begin(), r->pixels.end());
+  if (!std::is_sorted(r->pixels.begin(), r->pixels.end()))  // mostly drawn in order already
+    std::sort(r->pixels.begin(), r->pixels.end());
   if (r->pixels.empty()) return;
   r->u_min = r->width;
   r->v_min = r->height;
+  // Row by row (the pixels are sorted): a division per row, not per pixel.
+  std::uint32_t row_start = 0, row_end = 0;
+  int v = 0;
   for (std::uint32_t i : r->pixels) {
-    const int u = static_cast<int>(i % r->width), v = static_cast<int>(i / r->width);
+    if (i >= row_end) {
+      v = static_cast<int>(i / r->width);
+      row_start = static_cast<std::uint32_t>(v) * static_cast<std::uint32_t>(r->width);
+      row_end = row_start + static_cast<std::uint32_t>(r->width);
+    }
+    const int u = static_cast<int>(i - row_start);
     r->u_min = std::min(r->u_min, u);
     r->u_max = std::max(r->u_max, u);
     r->v_min = std::min(r->v_min, v);
@@ -163,10 +167,11 @@ PanelRegion RegionFromRectangle(const camera::Intrinsics& in, const PanelRectang
   const int v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 2);
   const int v1 = std::min(in.height - 1, static_cast<int>(std::ceil(vmax)) + 2);
   Eigen::Vector2d st;
+  const PixelNormalizer normalized(in);
   for (int v = v0; v <= v1; ++v) {
     for (int u = u0; u <= u1; ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * in.width + u;
-      const Eigen::Vector2d r = camera::PixelToNormalized(in, {u, v});
+      const Eigen::Vector2d r = normalized(u, v);
       if (!rect.PlaneCoordinates({r.x(), r.y(), 1.0}, &st)) continue;
       if (std::fabs(st.x()) <= half_w && std::fabs(st.y()) <= half_h)
         region.pixels.push_back(static_cast<std::uint32_t>(i));

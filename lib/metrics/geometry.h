@@ -4,7 +4,9 @@
 // panel rectangle, and the one definition of the panel's image region.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -35,13 +37,41 @@ class RayTable {
   std::vector<float> norm_;
 };
 
+// camera::PixelToNormalized of whole pixels (u, v), the same values: without distortion one
+// division per column and per row of the image instead of two per pixel.
+class PixelNormalizer {
+ public:
+  explicit PixelNormalizer(const camera::Intrinsics& intrinsics);
+  Eigen::Vector2d operator()(int u, int v) const {
+    if (distorted_) return camera::PixelToNormalized(intrinsics_, {u, v});
+    return {x_[static_cast<std::size_t>(u)], y_[static_cast<std::size_t>(v)]};
+  }
+  // The same of pixel index i = v·width + u.
+  Eigen::Vector2d OfIndex(std::uint32_t i) const {
+    const int w = intrinsics_.width;
+    return (*this)(static_cast<int>(i % w), static_cast<int>(i / w));
+  }
+
+ private:
+  camera::Intrinsics intrinsics_;
+  bool distorted_ = false;
+  std::vector<double> x_, y_;  // per column, per row
+};
+
 // Plane n·p + d = 0 with |n| = 1, n oriented toward the camera (d > 0 for a plane in front).
 struct Plane {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
   double offset_m = 0.0;
   double Distance(const Eigen::Vector3d& p) const { return normal.dot(p) + offset_m; }
   // Depth Z at which the ray (x/z, y/z, 1) meets the plane; NaN when parallel or behind.
-  double DepthOnRay(const Eigen::Vector3d& ray) const;
+  // (Inline: the metrics call it per pixel.)
+  double DepthOnRay(const Eigen::Vector3d& ray) const {
+    // n·(Z·r) + d = 0  →  Z = −d / (n·r).
+    const double nr = normal.dot(ray);
+    if (std::fabs(nr) < 1e-12) return std::numeric_limits<double>::quiet_NaN();
+    const double z = -offset_m / nr;
+    return z > 0 ? z : std::numeric_limits<double>::quiet_NaN();
+  }
 };
 
 // Sums for a least-squares plane: Σw, Σw·p, Σw·p·pᵀ.
@@ -74,7 +104,13 @@ struct PanelRectangle {
   std::array<Eigen::Vector3d, 4> Corners() const;
   // In-plane coordinates (along width, along up) of the point where ray meets the plane,
   // relative to the centre; false when the ray misses the plane.
-  bool PlaneCoordinates(const Eigen::Vector3d& ray, Eigen::Vector2d* st) const;
+  bool PlaneCoordinates(const Eigen::Vector3d& ray, Eigen::Vector2d* st) const {
+    const double z = plane.DepthOnRay(ray);
+    if (!std::isfinite(z)) return false;
+    const Eigen::Vector3d q = z * ray - center_m;
+    *st = {q.dot(axis_width), q.dot(axis_up)};
+    return true;
+  }
 };
 
 // The pixels a region covers, as sorted pixel indices (v·width + u), and its outline.

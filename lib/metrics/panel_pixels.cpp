@@ -11,8 +11,10 @@ namespace {
 
 // Inverse-depth plane 1/Z = k·(x/z, y/z, 1) of the pixels' means, each weighted by its samples;
 // false when fewer than 3 pixels or a degenerate system.
+// weight_per_mean[k] = weight[k] / mean_m[k].
 bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
-                          const std::vector<double>& mean_m, const std::vector<double>& weight,
+                          const std::vector<double>& weight_per_mean,
+                          const std::vector<double>& weight,
                           const std::vector<std::uint8_t>& use, Plane* plane) {
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
   Eigen::Vector3d atb = Eigen::Vector3d::Zero();
@@ -20,7 +22,7 @@ bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
   for (std::size_t k = 0; k < rays.size(); ++k) {
     if (!use[k]) continue;
     ata += weight[k] * rays[k] * rays[k].transpose();
-    atb += weight[k] / mean_m[k] * rays[k];
+    atb += weight_per_mean[k] * rays[k];
     ++used;
   }
   if (used < 3) return false;
@@ -36,16 +38,16 @@ bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
 }
 
 // 1.4826 × the median of |disparity residual|·√n over the used pixels: σ_d of one sample.
-double ScatterPx(const std::vector<Eigen::Vector3d>& rays, const std::vector<double>& mean_m,
-                 const std::vector<double>& weight, const std::vector<std::uint8_t>& use,
-                 const Plane& plane, double fb) {
-  std::vector<double> r;
-  r.reserve(rays.size());
+// disparity[k] = fb / mean_m[k], sqrt_weight[k] = √weight[k]; r is scratch.
+double ScatterPx(const std::vector<Eigen::Vector3d>& rays, const std::vector<double>& disparity,
+                 const std::vector<double>& sqrt_weight, const std::vector<std::uint8_t>& use,
+                 const Plane& plane, double fb, std::vector<double>& r) {
+  r.clear();
   for (std::size_t k = 0; k < rays.size(); ++k) {
     if (!use[k]) continue;
     const double zp = plane.DepthOnRay(rays[k]);
     if (!std::isfinite(zp)) continue;
-    r.push_back(std::fabs(fb / mean_m[k] - fb / zp) * std::sqrt(weight[k]));
+    r.push_back(std::fabs(disparity[k] - fb / zp) * sqrt_weight[k]);
   }
   if (r.empty()) return 0.0;
   const std::size_t mid = r.size() / 2;
@@ -102,10 +104,9 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
   std::vector<Eigen::Vector3d> rays(n);
   std::vector<double> mean_m(n, 0.0), weight(n, 0.0);
   std::vector<std::uint8_t> use(n, 0);
+  const PixelNormalizer normalized(in);
   for (std::size_t k = 0; k < n; ++k) {
-    const std::uint32_t i = region.pixels[k];
-    const Eigen::Vector2d r = camera::PixelToNormalized(
-        in, {static_cast<double>(i % in.width), static_cast<double>(i / in.width)});
+    const Eigen::Vector2d r = normalized.OfIndex(region.pixels[k]);
     rays[k] = {r.x(), r.y(), 1.0};
     if (k < pooled.size() && pooled[k].count > 0) {
       weight[k] = pooled[k].count;
@@ -114,12 +115,15 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
     }
   }
   const double fb = in.fx * p.baseline_m;
-  // What does not change from one plane to the next: the ground, 1/√n.
+  // What does not change from one plane to the next: the ground, √n, 1/√n, n/Z, f·B/Z.
   std::vector<std::uint8_t> on_ground(n, 0);
-  std::vector<double> inv_sqrt_n(n, 0.0);
+  std::vector<double> inv_sqrt_n(n, 0.0), sqrt_n(n, 0.0), n_per_z(n, 0.0), disparity(n, 0.0);
   for (std::size_t k = 0; k < n; ++k) {
     if (!use[k]) continue;
-    inv_sqrt_n[k] = 1.0 / std::sqrt(weight[k]);
+    sqrt_n[k] = std::sqrt(weight[k]);
+    inv_sqrt_n[k] = 1.0 / sqrt_n[k];
+    n_per_z[k] = weight[k] / mean_m[k];
+    disparity[k] = fb / mean_m[k];
     on_ground[k] = ground && ground->Distance(mean_m[k] * rays[k]) < p.ground_distance_m;
   }
   // ClassifyMeanDepth, with those precomputed.
@@ -135,18 +139,21 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
     return PixelClass::kOnPlane;
   };
   // First plane: every observed pixel; then the pixels on it, until they no longer change.
-  out.plane_ok = FitInverseDepthPlane(rays, mean_m, weight, use, &out.plane);
+  out.plane_ok = FitInverseDepthPlane(rays, n_per_z, weight, use, &out.plane);
   const std::vector<std::uint8_t>& observed = use;
   std::vector<std::uint8_t> on(n, 0), last;
+  std::vector<double> scratch;
+  scratch.reserve(n);
   for (int it = 0; out.plane_ok; ++it) {
-    out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px,
-                                   ScatterPx(rays, mean_m, weight, observed, out.plane, fb));
+    out.subpixel_rms_px =
+        std::max(p.expected_subpixel_rms_px,
+                 ScatterPx(rays, disparity, sqrt_n, observed, out.plane, fb, scratch));
     if (it == p.refit_iterations) break;
     for (std::size_t k = 0; k < n; ++k)
       on[k] = observed[k] && classify(k) == PixelClass::kOnPlane;
     if (on == last) break;  // the refit would give the same plane and σ
     Plane refit;
-    if (!FitInverseDepthPlane(rays, mean_m, weight, on, &refit)) break;
+    if (!FitInverseDepthPlane(rays, n_per_z, weight, on, &refit)) break;
     out.plane = refit;
     last = on;
   }

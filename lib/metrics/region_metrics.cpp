@@ -88,10 +88,9 @@ RegionMetrics::RegionMetrics(const camera::Intrinsics& intrinsics, const PanelRe
     throw std::invalid_argument("metrics kernel: the region's image size is not the intrinsics'");
   rays_.reserve(pixels_.size());
   range_per_count_.reserve(pixels_.size());
+  const PixelNormalizer normalized(intrinsics);
   for (std::uint32_t i : pixels_) {
-    const Eigen::Vector2d r = camera::PixelToNormalized(
-        intrinsics, {static_cast<double>(i % intrinsics.width),
-                     static_cast<double>(i / intrinsics.width)});
+    const Eigen::Vector2d r = normalized.OfIndex(i);
     rays_.emplace_back(r.x(), r.y(), 1.0);
     range_per_count_.push_back(static_cast<float>(std::sqrt(1.0 + r.squaredNorm())));
   }
