@@ -42,7 +42,8 @@ for _ in $(seq "$REPEAT"); do
   runs+=("$(timed "$SIM" --protocol "$OUT_DIR/protocol.yaml" \
             --sensor config/sensor_calibrated.yaml --out-dir "$OUT_DIR/bags")")
 done
-read -r write_s write_cpu <<< "$(printf '%s\n' "${runs[@]}" | best)"
+best_run=$(printf '%s\n' "${runs[@]}" | best)  # assigned first: a failure here is reported
+read -r write_s write_cpu <<< "$best_run"
 frames=$((16 * FRAMES))
 bytes=$(du -cb "$OUT_DIR"/bags/*.bag | tail -1 | cut -f1)
 printf '%-52s %8s %8s %14s %12s\n' "case" "wall_s" "cpu_s" "measured" "target"
@@ -62,7 +63,8 @@ for threads in default 1; do
     runs+=("$(timed "$SIM" --protocol config/protocol_paper.yaml --metrics-only --frames 30 \
               --out "$OUT_DIR/metrics.csv" "${args[@]}")")
   done
-  read -r s cpu <<< "$(printf '%s\n' "${runs[@]}" | best)"
+  best_run=$(printf '%s\n' "${runs[@]}" | best)
+  read -r s cpu <<< "$best_run"
   printf '%-52s %8.3f %8.3f %14s %12s\n' "metrics-only, 128 cells x 30 frames, threads $threads" \
     "$s" "$cpu" "" "< 1 s"
 done

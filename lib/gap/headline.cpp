@@ -6,14 +6,10 @@
 #include <sstream>
 
 #include "gap/report_util.h"
+#include "gap/unexplained.h"
 
 namespace depthbias::gap::text {
 namespace {
-
-std::string PointName(const PlacementEstimate& pe, int t) {
-  return pe.point_light[t] + " " + Num(pe.point_distance_m[t]) + " m " +
-         Num(pe.point_angle_deg[t]) + "°";
-}
 
 // Index of the median bias among the compared metrics (−1: none).
 int MedianIndex(const DiagnoseResult& r) {
@@ -181,7 +177,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
       for (int t = 0; t < pe.num_points; ++t)
         if (pe.flagged[k][t]) {
           ++rows;
-          o << "| " << PointName(pe, t) << " | " << r.metric_names[k] << " | "
+          o << "| " << TestPointName(pe, t) << " | " << r.metric_names[k] << " | "
             << Signed(pe.departure[k][t]) << " " << InfoOf(r.design.metrics[k]).unit << " | "
             << Num(pe.departure_z[k][t], 2) << " |\n";
         }

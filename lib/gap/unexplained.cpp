@@ -20,8 +20,7 @@ std::string Num(double v) {
 }
 
 std::string PointName(const PlacementEstimate& pe, int t) {
-  return "test point " + pe.point_light[t] + " " + Num(pe.point_distance_m[t]) + " m " +
-         Num(pe.point_angle_deg[t]) + "°";
+  return "test point " + TestPointName(pe, t);
 }
 
 // The candidate groups of cells: every level of a factor and of a pair of factors that holds
@@ -249,6 +248,11 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
 
 }  // namespace
 
+std::string TestPointName(const PlacementEstimate& pe, int t) {
+  return pe.point_light[t] + " " + Num(pe.point_distance_m[t]) + " m " +
+         Num(pe.point_angle_deg[t]) + "°";
+}
+
 std::string LevelName(const sim::Cell& c, int factor) {
   switch (factor) {
     case 0: return "distance " + Num(c.distance_m) + " m";
@@ -309,7 +313,7 @@ std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<doubl
     // Permutations keep what the whole table shares. In the median bias a departure of every
     // test point, constant or growing with distance, is tested by signs drawn for test points
     // as wholes: a placement is as likely short as long.
-    if (std::string(InfoOf(d.metrics[k]).name) != "median_bias_m" || pe.empty()) continue;
+    if (d.metrics[k] != kMedianBias || pe.empty()) continue;
     const double p_shared = SharedDepartureP(m, mu, k, blocks, params);
     if (p_shared >= params.alpha / kk) continue;
     std::vector<int> all(d.num_cells());
@@ -318,7 +322,7 @@ std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<doubl
   }
   // The test points placed beyond the placement law, in the median bias.
   for (int k = 0; k < kk && !pe.empty(); ++k) {
-    if (std::string(InfoOf(d.metrics[k]).name) != "median_bias_m") continue;
+    if (d.metrics[k] != kMedianBias) continue;
     double total = 0;
     for (size_t o = static_cast<size_t>(k); o < z.size(); o += kk)
       if (std::isfinite(z[o])) total += z[o] * z[o];

@@ -14,6 +14,8 @@ namespace depthbias::gap {
 // A level of one factor of a cell as text: 0 distance ("distance 16 m"), 1 angle, 2 preset,
 // 3 light, 4 emitter.
 std::string LevelName(const sim::Cell& cell, int factor);
+// A test point as text: "sunset 12 m 20°".
+std::string TestPointName(const PlacementEstimate& placement, int t);
 
 struct RestParams {
   double alpha = 0.05;      // a metric's rest is described if p < alpha / metrics
