@@ -3,6 +3,7 @@
 #include "camera/presets.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 
@@ -40,7 +41,42 @@ double HorizontalDistance(const SceneParams& scene, const Eigen::Matrix3d& level
   return (distance_m - axis.y() * drop_m) / per_h;
 }
 
+// Bit for bit: NaN equals itself, 0 and −0 differ (a cast may divide by either).
+bool Same(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool Same(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return Same(a.x(), b.x()) && Same(a.y(), b.y()) && Same(a.z(), b.z());
+}
+
 }  // namespace
+
+bool Identical(const SceneParams& a, const SceneParams& b) {
+  if (!(Same(a.camera_height_m, b.camera_height_m) &&
+        Same(a.camera_pitch_deg, b.camera_pitch_deg) &&
+        Same(a.camera_roll_deg, b.camera_roll_deg) && Same(a.ground_texture, b.ground_texture) &&
+        Same(a.panel_width_m, b.panel_width_m) && Same(a.panel_height_m, b.panel_height_m) &&
+        Same(a.panel_center_height_m, b.panel_center_height_m) &&
+        Same(a.panel_yaw_deg, b.panel_yaw_deg) && Same(a.panel_texture, b.panel_texture) &&
+        Same(a.background_distance_m, b.background_distance_m) &&
+        Same(a.background_texture, b.background_texture) && a.panel == b.panel &&
+        Same(a.hedge.distance_m, b.hedge.distance_m) && Same(a.hedge.height_m, b.hedge.height_m) &&
+        Same(a.hedge.texture, b.hedge.texture) && a.obstacles.size() == b.obstacles.size()))
+    return false;
+  for (size_t i = 0; i < a.obstacles.size(); ++i) {
+    const Obstacle &p = a.obstacles[i], &q = b.obstacles[i];
+    if (!(p.kind == q.kind && p.shape == q.shape && Same(p.range_m, q.range_m) &&
+          Same(p.azimuth_deg, q.azimuth_deg) && Same(p.width_m, q.width_m) &&
+          Same(p.depth_m, q.depth_m) && Same(p.height_m, q.height_m) &&
+          Same(p.texture, q.texture)))
+      return false;
+  }
+  return true;
+}
+
+bool Identical(const PanelPose& a, const PanelPose& b) {
+  return Same(a.center_m, b.center_m) && Same(a.normal, b.normal) &&
+         Same(a.axis_width, b.axis_width) && Same(a.axis_height, b.axis_height) &&
+         Same(a.width_m, b.width_m) && Same(a.height_m, b.height_m);
+}
 
 std::string DistanceIsName(DistanceIs d) { return d == DistanceIs::kRange ? "range" : "depth"; }
 

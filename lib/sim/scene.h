@@ -66,6 +66,9 @@ struct SceneParams {
 
   bool IsValid(std::string* why) const;
 };
+// Every field bit for bit (a field added to SceneParams, Obstacle or Hedge must be compared
+// here: StereoSim's cache of ray casts is keyed by it).
+bool Identical(const SceneParams& a, const SceneParams& b);
 
 // One recording of a protocol.
 struct Cell {
@@ -109,6 +112,7 @@ struct PanelPose {
   double width_m = 1.0;
   double height_m = 1.0;
 };
+bool Identical(const PanelPose& a, const PanelPose& b);  // bit for bit
 
 // Camera orientation: R such that v_level = R · v_camera.
 Eigen::Matrix3d LevelFromCamera(const SceneParams& scene);

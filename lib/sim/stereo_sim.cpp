@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <mutex>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -111,7 +113,154 @@ std::vector<float> Extreme(const std::vector<float>& in, int w, int h, int r, bo
   return out;
 }
 
+// Bit for bit, like scene.h's Identical.
+bool Same(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+bool Identical(const camera::Intrinsics& a, const camera::Intrinsics& b) {
+  if (!(a.width == b.width && a.height == b.height && Same(a.fx, b.fx) && Same(a.fy, b.fy) &&
+        Same(a.ppx, b.ppx) && Same(a.ppy, b.ppy) && a.model == b.model))
+    return false;
+  for (size_t i = 0; i < a.coeffs.size(); ++i)
+    if (!Same(a.coeffs[i], b.coeffs[i])) return false;
+  return true;
+}
+
+bool Identical(const Window& a, const Window& b) {
+  return a.u0 == b.u0 && a.v0 == b.v0 && a.width == b.width && a.height == b.height;
+}
+
+// Everything the depth-count table reads.
+struct CountsKey {
+  double fb, step, min_depth_m, max_depth_m, depth_scale, depth_units_m;
+};
+bool Identical(const CountsKey& a, const CountsKey& b) {
+  return Same(a.fb, b.fb) && Same(a.step, b.step) && Same(a.min_depth_m, b.min_depth_m) &&
+         Same(a.max_depth_m, b.max_depth_m) && Same(a.depth_scale, b.depth_scale) &&
+         Same(a.depth_units_m, b.depth_units_m);
+}
+
+// Everything a window's ray cast and its depth edges read: the scene (its background moved by
+// region_spill), the panel as placed (the protocol, the cell and the departures that move it),
+// the camera, the window, f·B and the edge parameters.
+struct CastKey {
+  SceneParams scene;
+  PanelPose panel;
+  camera::Intrinsics intrinsics;
+  Window window;
+  double fb = 0;
+  int edge_band_px = 0;
+  double edge_jump_rel = 0;
+};
+bool Identical(const CastKey& a, const CastKey& b) {  // the cheap fields first
+  return Identical(a.window, b.window) && Same(a.fb, b.fb) && Identical(a.panel, b.panel) &&
+         a.edge_band_px == b.edge_band_px && Same(a.edge_jump_rel, b.edge_jump_rel) &&
+         Identical(a.intrinsics, b.intrinsics) && Identical(a.scene, b.scene);
+}
+
+// Everything RegionPixels reads: the panel as placed, the camera, the window, the margin and
+// the region spill.
+struct RegionKey {
+  PanelPose panel;
+  camera::Intrinsics intrinsics;
+  Window window;
+  double margin_px = 0;
+  double spill_px = 0;
+};
+bool Identical(const RegionKey& a, const RegionKey& b) {
+  return Identical(a.window, b.window) && Same(a.margin_px, b.margin_px) &&
+         Same(a.spill_px, b.spill_px) && Identical(a.panel, b.panel) &&
+         Identical(a.intrinsics, b.intrinsics);
+}
+struct RegionData {
+  std::vector<int> window;      // PixelList::window; PixelList::image is region.pixels
+  metrics::PanelRegion region;  // limited to the window
+};
+
+// Immutable values shared between simulations and threads, under keys compared whole and bit
+// for bit. At most `budget` bytes are held, none over a quarter of it;
+// when full, the least recently used values go first (the recordings of one simulation of a
+// table share a value only if it outlives the recordings between them: a budget below one
+// table's worth drops every value before it is used again). A value dropped here lives on in
+// the simulations that hold it.
+template <typename Key, typename Value>
+class SharedCache {
+ public:
+  explicit SharedCache(std::size_t budget) : budget_(budget) {}
+
+  std::shared_ptr<const Value> Find(const Key& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (Entry& e : entries_)
+      if (Identical(e.key, key)) {
+        e.last_use = ++clock_;
+        return e.value;
+      }
+    return nullptr;
+  }
+
+  // False if the value is not kept (too large, or another thread was first).
+  bool Insert(const Key& key, std::shared_ptr<const Value> value, std::size_t bytes) {
+    if (bytes > budget_ / 4) return false;
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const Entry& e : entries_)
+      if (Identical(e.key, key)) return false;
+    while (held_ + bytes > budget_ && !entries_.empty()) {
+      const auto victim =
+          std::min_element(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) {
+            return a.last_use < b.last_use;
+          });
+      held_ -= victim->bytes;
+      *victim = std::move(entries_.back());
+      entries_.pop_back();
+    }
+    entries_.push_back({key, std::move(value), bytes, ++clock_});
+    held_ += bytes;
+    return true;
+  }
+
+ private:
+  struct Entry {
+    Key key;
+    std::shared_ptr<const Value> value;
+    std::size_t bytes;
+    std::uint64_t last_use;
+  };
+  std::mutex mutex_;
+  std::vector<Entry> entries_;
+  std::size_t budget_;
+  std::size_t held_ = 0;
+  std::uint64_t clock_ = 0;
+};
+
+// The article's 128 cells stand at 16 placements: their windows' casts take 3.0 MB, their regions
+// 1.3 MB, and one sensor's count table 10 kB.
+constexpr std::size_t kCountsCacheBytes = std::size_t{256} << 10;
+constexpr std::size_t kCastCacheBytes = std::size_t{4} << 20;
+constexpr std::size_t kRegionCacheBytes = std::size_t{2} << 20;
+
 }  // namespace
+
+// The depth counts of quantized disparity k·step, [0] = 0: no depth.
+struct StereoSim::CountsTable {
+  int k_min = 0;
+  int k_max = 0;
+  std::vector<std::uint16_t> counts;
+};
+
+// A window's ray cast (row-major window pixels) and its depth edges.
+struct StereoSim::CastMaps {
+  std::vector<float> true_depth_m;     // 0 where nothing is hit
+  std::vector<unsigned char> surface;  // Surface
+  std::vector<float> texture;
+  std::vector<float> disparity;        // f·B/Z, 0 where nothing is hit
+  std::vector<unsigned char> near_edge;  // on the far side of a depth edge, within its band
+
+  void Cast(const SceneParams& scene, const PanelPose& panel, const camera::Intrinsics& in,
+            const Window& window, double fb, int edge_band_px, double edge_jump_rel,
+            int threads);
+  std::size_t bytes() const {
+    return sizeof(*this) + true_depth_m.size() * (3 * sizeof(float) + 2);
+  }
+};
 
 bool SimParams::IsValid(std::string* why) const {
   if (!protocol.IsValid(why)) return false;
@@ -167,93 +316,66 @@ void StereoSim::Build() {
   sigma_f_ = static_cast<float>(sigma_px_);
   gauss_ = GaussTable().data();
 
-  // Quantized disparity k·step → depth counts; out of [min, max] depth → no entry.
+  // Quantized disparity k·step → depth counts; out of [min, max] depth → no entry. The same
+  // table for every recording of a sensor.
   inv_step_ = 1.0 / s.subpixel_step_px;
-  k_min_ = static_cast<int>(std::ceil(fb / (s.max_depth_m * s.subpixel_step_px)));
-  k_max_ = static_cast<int>(std::floor(fb / (s.min_depth_m * s.subpixel_step_px)));
-  k_min_ = std::max(k_min_, 1);
+  static SharedCache<CountsKey, CountsTable> counts_cache(kCountsCacheBytes);
+  const CountsKey counts_key{fb, s.subpixel_step_px, s.min_depth_m, s.max_depth_m,
+                             dep.depth_scale, s.depth_units_m};
+  counts_table_ = counts_cache.Find(counts_key);
+  if (!counts_table_) {
+    auto t = std::make_shared<CountsTable>();
+    t->k_min = static_cast<int>(std::ceil(fb / (s.max_depth_m * s.subpixel_step_px)));
+    t->k_max = static_cast<int>(std::floor(fb / (s.min_depth_m * s.subpixel_step_px)));
+    t->k_min = std::max(t->k_min, 1);
+    t->counts.assign(static_cast<size_t>(t->k_max) + 1, 0);  // [0] stays 0: no depth
+    for (int k = t->k_min; k <= t->k_max; ++k) {
+      const double depth_m = dep.depth_scale * fb / (k * s.subpixel_step_px);  // Z = f·B/d
+      t->counts[k] =
+          static_cast<std::uint16_t>(std::min(65535.0, std::round(depth_m / s.depth_units_m)));
+    }
+    counts_cache.Insert(counts_key, t, sizeof(CountsTable) + t->counts.size() * 2);
+    counts_table_ = std::move(t);
+  }
+  k_min_ = counts_table_->k_min;
+  k_max_ = counts_table_->k_max;
+  counts_of_k_ = counts_table_->counts.data();
   inv_step_f_ = static_cast<float>(inv_step_);
   k_min_f_ = static_cast<float>(k_min_);
   k_end_f_ = static_cast<float>(k_max_ + 1);
-  counts_of_k_.assign(static_cast<size_t>(k_max_) + 1, 0);  // [0] stays 0: no depth
-  for (int k = k_min_; k <= k_max_; ++k) {
-    const double depth_m = dep.depth_scale * fb / (k * s.subpixel_step_px);  // Z = f·B/d
-    counts_of_k_[k] =
-        static_cast<std::uint16_t>(std::min(65535.0, std::round(depth_m / s.depth_units_m)));
-  }
 
-  // True depth by ray casting (region_spill may bring the background nearer).
+  // True depth by ray casting (region_spill may bring the background nearer), and the depth
+  // edges: once per geometry, shared by the simulations that leave it alone.
   const int w = window_.width, h = window_.height;
   const size_t n = static_cast<size_t>(w) * h;
-  SceneParams scene = params_.protocol.scene;
+  CastKey cast_key{params_.protocol.scene, truth_.panel, in, window_, fb, s.edge_band_px,
+                   s.edge_jump_rel};
   if (dep.background_depth_rel > 0)
-    scene.background_distance_m = dep.background_depth_rel * truth_.panel_depth_m;
-  RayCaster caster(scene, truth_.panel);
-  true_depth_m_.assign(n, 0.f);
-  surface_.assign(n, 0);
-  std::vector<float> texture(n, 0.f), disparity(n, 0.f);
-  ForRows(h, threads_, [&](int v_begin, int v_end) {
-    for (int v = v_begin; v < v_end; ++v) {
-      const double yn = (window_.v0 + v - in.ppy) / in.fy;
-      for (int u = 0; u < w; ++u) {
-        const double xn = (window_.u0 + u - in.ppx) / in.fx;
-        const Hit hit = caster.Cast(xn, yn);
-        const size_t i = static_cast<size_t>(v) * w + u;
-        true_depth_m_[i] = static_cast<float>(hit.depth_m);
-        surface_[i] = static_cast<unsigned char>(hit.surface);
-        texture[i] = static_cast<float>(hit.texture);
-        if (hit.surface != Surface::kNone) disparity[i] = static_cast<float>(fb / hit.depth_m);
-      }
-    }
-  });
-
-  // Depth edges, occlusion side: where two 4-neighbours' depths jump (relative jump beyond
-  // edge_jump_rel), the far pixel is on the edge's far side, the background one camera sees and
-  // the other does not. It carries the near side's depth; pixels within edge_band_px of it that
-  // are markedly farther than that near depth are in the band.
-  std::vector<unsigned char> near_edge(n, 0);
-  if (s.edge_band_px > 0) {
-    std::vector<float> near_z(n, 1e30f);
-    auto mark = [&](size_t a, size_t b) {
-      if (!surface_[a] && !surface_[b]) return;
-      if (!surface_[a] || !surface_[b]) {  // nothing hit beyond the edge: no depth there anyway
-        const size_t far = surface_[a] ? b : a, near = surface_[a] ? a : b;
-        near_z[far] = std::min(near_z[far], true_depth_m_[near]);
-        return;
-      }
-      const float za = true_depth_m_[a], zb = true_depth_m_[b];
-      if (std::fabs(za - zb) <= s.edge_jump_rel * std::min(za, zb)) return;
-      const size_t far = za > zb ? a : b;
-      near_z[far] = std::min(near_z[far], std::min(za, zb));
-    };
-    for (int v = 0; v < h; ++v)
-      for (int u = 0; u < w; ++u) {
-        const size_t i = static_cast<size_t>(v) * w + u;
-        if (u + 1 < w) mark(i, i + 1);
-        if (v + 1 < h) mark(i, i + w);
-      }
-    // Each marked pixel stamps its band (edges are sparse: this is the minimum filter of near_z
-    // evaluated where it is finite).
-    const int r = s.edge_band_px - 1;
-    for (int v = 0; v < h; ++v)
-      for (int u = 0; u < w; ++u) {
-        const float z = near_z[static_cast<size_t>(v) * w + u];
-        if (z >= 1e30f) continue;
-        for (int bv = std::max(0, v - r); bv <= std::min(h - 1, v + r); ++bv)
-          for (int bu = std::max(0, u - r); bu <= std::min(w - 1, u + r); ++bu) {
-            const size_t i = static_cast<size_t>(bv) * w + bu;
-            if (surface_[i] && z * (1 + s.edge_jump_rel) < true_depth_m_[i]) near_edge[i] = 1;
-          }
-      }
+    cast_key.scene.background_distance_m = dep.background_depth_rel * truth_.panel_depth_m;
+  static SharedCache<CastKey, CastMaps> cast_cache(kCastCacheBytes);
+  cast_ = cast_cache.Find(cast_key);
+  std::shared_ptr<CastMaps> unshared;  // a cast this simulation alone holds
+  if (!cast_) {
+    auto c = std::make_shared<CastMaps>();
+    c->Cast(cast_key.scene, truth_.panel, in, window_, fb, s.edge_band_px, s.edge_jump_rel,
+            threads_);
+    if (!cast_cache.Insert(cast_key, c, c->bytes())) unshared = c;
+    cast_ = std::move(c);
   }
+  true_depth_m_ = cast_->true_depth_m.data();
+  surface_ = cast_->surface.data();
+  const float* const disparity = cast_->disparity.data();
+  const float* const texture = cast_->texture.data();
+  const unsigned char* const near_edge = cast_->near_edge.data();
 
   // Edge mixing: the other side of the nearest edge within the mixing width.
-  mix_delta_px_.assign(n, 0.f);
   const int mix_w = static_cast<int>(dep.edge_mix_width_px);
   mixing_ = mix_w > 0 && dep.edge_mix_strength > 0;
+  mix_delta_px_.clear();
   if (mixing_) {
-    const std::vector<float> lo = Extreme(disparity, w, h, mix_w, false);
-    const std::vector<float> hi = Extreme(disparity, w, h, mix_w, true);
+    mix_delta_px_.assign(n, 0.f);
+    const std::vector<float> lo = Extreme(cast_->disparity, w, h, mix_w, false);
+    const std::vector<float> hi = Extreme(cast_->disparity, w, h, mix_w, true);
     for (size_t i = 0; i < n; ++i) {
       if (!surface_[i] || !(hi[i] > lo[i] * (1 + s.edge_jump_rel))) continue;
       const float d = disparity[i];
@@ -262,22 +384,30 @@ void StereoSim::Build() {
     }
   }
 
-  // Static disparity and hole probability.
-  static_disparity_px_.assign(n, 0.f);
+  // Static disparity and hole probability. Without static departures the static disparity is
+  // the cast's (d + 0.0 rounds back to d).
+  const bool own_disparity = !dep.static_disparity.empty();
+  std::shared_ptr<std::vector<float>> own;
+  if (own_disparity) own = std::make_shared<std::vector<float>>(n, 0.f);
+  float* const own_d = own_disparity ? own->data() : nullptr;
+  const float* const static_d = own_disparity ? own_d : disparity;
   valid_threshold_.assign(n, 0);
   const double logit_scenario = Logit(truth_.scenario.invalid_prob);
   const bool offset_varies = !dep.disparity_over_time.empty();
   const double g = dep.invalid_odds_gain;
   ForRows(h, threads_, [&](int v_begin, int v_end) {
     double last_texture = -1, last_p = 0;
+    double last_hole_p = NAN;  // the hole probability last_threshold is of (NaN: none yet)
+    std::uint16_t last_threshold = 0;
     for (int v = v_begin; v < v_end; ++v) {
       const double yn = (window_.v0 + v - in.ppy) / in.fy;
       for (int u = 0; u < w; ++u) {
         const size_t i = static_cast<size_t>(v) * w + u;
         if (!surface_[i]) continue;
-        const double xn = (window_.u0 + u - in.ppx) / in.fx;
-        static_disparity_px_[i] =
-            static_cast<float>(disparity[i] + dep.StaticDisparityPx(xn, yn));
+        if (own_disparity) {
+          const double xn = (window_.u0 + u - in.ppx) / in.fx;
+          own_d[i] = static_cast<float>(disparity[i] + dep.StaticDisparityPx(xn, yn));
+        }
         double t = texture[i];
         if (cell_.emitter_on) {
           const double reach = s.emitter_reach_m / true_depth_m_[i];
@@ -292,20 +422,103 @@ void StereoSim::Build() {
         if (truth_.scenario.invalid_prob <= 0) p = 0;
         if (truth_.scenario.invalid_prob >= 1) p = 1;
         if (near_edge[i]) p = std::max(p, s.edge_invalid_prob);
-        p = g * p / (1 - p + g * p);  // odds × g
-        if (!std::isfinite(p)) p = 1;
-        valid_threshold_[i] = static_cast<std::uint16_t>(  // rounded: the value is >= 0
-            std::clamp(1.0 - p, 0.0, 1.0) * (1 << kValidBits) + 0.5);
+        if (!(p == last_hole_p)) {  // neighbours mostly share it: the odds once per change
+          last_hole_p = p;
+          p = g * p / (1 - p + g * p);  // odds × g
+          if (!std::isfinite(p)) p = 1;
+          last_threshold = static_cast<std::uint16_t>(  // rounded: the value is >= 0
+              std::clamp(1.0 - p, 0.0, 1.0) * (1 << kValidBits) + 0.5);
+        }
+        valid_threshold_[i] = last_threshold;
         // A disparity that noise (truncated at 3.5σ) and mixing cannot bring into range never
         // gives depth: skip its draws (not with a time-varying offset, which has no bound).
-        const double reach_px = 3.6 * sigma_px_ + std::fabs(mix_delta_px_[i]);
+        const double reach_px =
+            3.6 * sigma_px_ + (mixing_ ? std::fabs(mix_delta_px_[i]) : 0.f);
         if (!offset_varies &&
-            ((static_disparity_px_[i] + reach_px) * inv_step_ + 0.5 < k_min_ ||
-             (static_disparity_px_[i] - reach_px) * inv_step_ + 0.5 >= k_max_ + 1))
+            ((static_d[i] + reach_px) * inv_step_ + 0.5 < k_min_ ||
+             (static_d[i] - reach_px) * inv_step_ + 0.5 >= k_max_ + 1))
           valid_threshold_[i] = 0;
       }
     }
   });
+  if (own_disparity)
+    static_disparity_px_ = std::move(own);
+  else
+    static_disparity_px_ = std::shared_ptr<const std::vector<float>>(cast_, &cast_->disparity);
+  if (unshared) {  // what only the static maps read (a whole image's cast is not shared)
+    unshared->texture = std::vector<float>();
+    unshared->near_edge = std::vector<unsigned char>();
+  }
+}
+
+void StereoSim::CastMaps::Cast(const SceneParams& scene, const PanelPose& panel,
+                               const camera::Intrinsics& in, const Window& window, double fb,
+                               int edge_band_px, double edge_jump_rel, int threads) {
+  const int w = window.width, h = window.height;
+  const size_t n = static_cast<size_t>(w) * h;
+  RayCaster caster(scene, panel);
+  true_depth_m.assign(n, 0.f);
+  surface.assign(n, 0);
+  texture.assign(n, 0.f);
+  disparity.assign(n, 0.f);
+  float* const true_depth_p = true_depth_m.data();
+  unsigned char* const surface_p = surface.data();
+  float* const texture_p = texture.data();
+  float* const disparity_p = disparity.data();
+  ForRows(h, threads, [&](int v_begin, int v_end) {
+    for (int v = v_begin; v < v_end; ++v) {
+      const double yn = (window.v0 + v - in.ppy) / in.fy;
+      for (int u = 0; u < w; ++u) {
+        const double xn = (window.u0 + u - in.ppx) / in.fx;
+        const Hit hit = caster.Cast(xn, yn);
+        const size_t i = static_cast<size_t>(v) * w + u;
+        true_depth_p[i] = static_cast<float>(hit.depth_m);
+        surface_p[i] = static_cast<unsigned char>(hit.surface);
+        texture_p[i] = static_cast<float>(hit.texture);
+        if (hit.surface != Surface::kNone) disparity_p[i] = static_cast<float>(fb / hit.depth_m);
+      }
+    }
+  });
+
+  // Depth edges, occlusion side: where two 4-neighbours' depths jump (relative jump beyond
+  // edge_jump_rel), the far pixel is on the edge's far side, the background one camera sees and
+  // the other does not. It carries the near side's depth; pixels within edge_band_px of it that
+  // are markedly farther than that near depth are in the band.
+  near_edge.assign(n, 0);
+  if (edge_band_px > 0) {
+    std::vector<float> near_z(n, 1e30f);
+    auto mark = [&](size_t a, size_t b) {
+      if (!surface_p[a] && !surface_p[b]) return;
+      if (!surface_p[a] || !surface_p[b]) {  // nothing hit beyond the edge: no depth there anyway
+        const size_t far = surface_p[a] ? b : a, near = surface_p[a] ? a : b;
+        near_z[far] = std::min(near_z[far], true_depth_p[near]);
+        return;
+      }
+      const float za = true_depth_p[a], zb = true_depth_p[b];
+      if (std::fabs(za - zb) <= edge_jump_rel * std::min(za, zb)) return;
+      const size_t far = za > zb ? a : b;
+      near_z[far] = std::min(near_z[far], std::min(za, zb));
+    };
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const size_t i = static_cast<size_t>(v) * w + u;
+        if (u + 1 < w) mark(i, i + 1);
+        if (v + 1 < h) mark(i, i + w);
+      }
+    // Each marked pixel stamps its band (edges are sparse: this is the minimum filter of near_z
+    // evaluated where it is finite).
+    const int r = edge_band_px - 1;
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const float z = near_z[static_cast<size_t>(v) * w + u];
+        if (z >= 1e30f) continue;
+        for (int bv = std::max(0, v - r); bv <= std::min(h - 1, v + r); ++bv)
+          for (int bu = std::max(0, u - r); bu <= std::min(w - 1, u + r); ++bu) {
+            const size_t i = static_cast<size_t>(bv) * w + bu;
+            if (surface_p[i] && z * (1 + edge_jump_rel) < true_depth_p[i]) near_edge[i] = 1;
+          }
+      }
+  }
 }
 
 std::uint64_t StereoSim::Counter(int frame_index, int pixel) const {
@@ -369,9 +582,8 @@ void StereoSim::Render(int frame_index, records::DepthFrame* frame, int threads)
   if (frame->counts.size() != n || !whole) frame->counts.assign(n, 0);
   const float offset =
       static_cast<float>(params_.departures.DisparityAtTimePx(frame_index / proto.fps));
-  const Maps maps{static_disparity_px_.data(), mix_delta_px_.data(), valid_threshold_.data(),
-                  gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
-                  sigma_f_};
+  const Maps maps{static_disparity_px_->data(), mix_delta_px_.data(), valid_threshold_.data(),
+                  gauss_, counts_of_k_, inv_step_f_, k_min_f_, k_end_f_, offset, sigma_f_};
   std::uint16_t* const counts = frame->counts.data();
   const std::uint64_t seed = truth_.cell_seed;
   // Pixels go by pairs of draws (counters 2j, 2j + 1) that share one hash. A pixel that never
@@ -409,9 +621,8 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
                              std::vector<std::uint16_t>* counts) const {
   const float offset = static_cast<float>(
       params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
-  const Maps maps{static_disparity_px_.data(), mix_delta_px_.data(), valid_threshold_.data(),
-                  gauss_, counts_of_k_.data(), inv_step_f_, k_min_f_, k_end_f_, offset,
-                  sigma_f_};
+  const Maps maps{static_disparity_px_->data(), mix_delta_px_.data(), valid_threshold_.data(),
+                  gauss_, counts_of_k_, inv_step_f_, k_min_f_, k_end_f_, offset, sigma_f_};
   const auto& in = params_.sensor.intrinsics;
   const std::uint64_t frame_base = static_cast<std::uint64_t>(frame_index) *
                                    static_cast<std::uint64_t>(in.width) * in.height;
@@ -453,38 +664,50 @@ metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose) {
 }
 
 PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out) const {
-  metrics::PanelRectangle rect = PanelRectangleOf(truth_.panel);
-  if (params_.departures.region_spill_px > 0) {  // region_spill: the region drawn larger
-    const Eigen::Vector2d foot = metrics::PixelFootprint(params_.sensor.intrinsics, rect);
-    rect.width_m += 2 * params_.departures.region_spill_px * foot.x();
-    rect.height_m += 2 * params_.departures.region_spill_px * foot.y();
-  }
-  metrics::PanelRegion region =
-      metrics::RegionFromRectangle(params_.sensor.intrinsics, rect, margin_px);
-  const int width = params_.sensor.intrinsics.width;
-  PixelList pixels;
-  std::vector<std::uint32_t> kept;
-  kept.reserve(region.pixels.size());
-  for (std::uint32_t i : region.pixels) {
-    const int u = static_cast<int>(i % width) - window_.u0;
-    const int v = static_cast<int>(i / width) - window_.v0;
-    if (u < 0 || v < 0 || u >= window_.width || v >= window_.height) continue;
-    const int w = v * window_.width + u;
-    pixels.window.push_back(w);
-    pixels.image.push_back(Counter(0, w));
-    kept.push_back(i);
-  }
-  if (region_out) {
+  // The same panel, camera and window give the same region: drawn once, shared.
+  static SharedCache<RegionKey, RegionData> cache(kRegionCacheBytes);
+  const RegionKey key{truth_.panel, params_.sensor.intrinsics, window_, margin_px,
+                      params_.departures.region_spill_px};
+  std::shared_ptr<const RegionData> found = cache.Find(key);
+  if (!found) {
+    auto made = std::make_shared<RegionData>();
+    metrics::PanelRectangle rect = PanelRectangleOf(truth_.panel);
+    if (params_.departures.region_spill_px > 0) {  // region_spill: the region drawn larger
+      const Eigen::Vector2d foot = metrics::PixelFootprint(params_.sensor.intrinsics, rect);
+      rect.width_m += 2 * params_.departures.region_spill_px * foot.x();
+      rect.height_m += 2 * params_.departures.region_spill_px * foot.y();
+    }
+    metrics::PanelRegion region =
+        metrics::RegionFromRectangle(params_.sensor.intrinsics, rect, margin_px);
+    const int width = params_.sensor.intrinsics.width;
+    std::vector<std::uint32_t> kept;
+    kept.reserve(region.pixels.size());
+    for (std::uint32_t i : region.pixels) {
+      const int u = static_cast<int>(i % width) - window_.u0;
+      const int v = static_cast<int>(i / width) - window_.v0;
+      if (u < 0 || v < 0 || u >= window_.width || v >= window_.height) continue;
+      made->window.push_back(v * window_.width + u);
+      kept.push_back(i);
+    }
     region.pixels.swap(kept);
-    *region_out = std::move(region);
+    made->region = std::move(region);
+    const std::size_t bytes = sizeof(RegionData) + made->window.size() * (sizeof(int) + 4) +
+                              made->region.outline_px.size() * sizeof(Eigen::Vector2d);
+    cache.Insert(key, made, bytes);
+    found = std::move(made);
   }
+  if (region_out) *region_out = found->region;
+  PixelList pixels;
+  pixels.window = found->window;
+  // A region pixel's index in the image is its draw's index in frame 0 (Counter).
+  pixels.image.assign(found->region.pixels.begin(), found->region.pixels.end());
   return pixels;
 }
 
 PixelList StereoSim::PanelPixels(int margin_px) const {
   const int w = window_.width, h = window_.height;
-  std::vector<unsigned char> not_panel(surface_.size());
-  for (size_t i = 0; i < surface_.size(); ++i)
+  std::vector<unsigned char> not_panel(static_cast<size_t>(w) * h);
+  for (size_t i = 0; i < not_panel.size(); ++i)
     not_panel[i] = surface_[i] != static_cast<unsigned char>(Surface::kPanel);
   const std::vector<unsigned char> eroded_out = Dilate(not_panel, w, h, margin_px);
   PixelList pixels;

@@ -7,6 +7,7 @@
 // change of a parameter keeps the draws (common random numbers).
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -99,13 +100,21 @@ class StereoSim {
   float inv_step_f_ = 32, k_min_f_ = 0, k_end_f_ = 0, sigma_f_ = 0;  // single-precision copies
   int k_min_ = 0;
   int k_max_ = 0;
-  std::vector<std::uint16_t> counts_of_k_;  // depth counts of quantized disparity k·step
-  std::vector<float> static_disparity_px_;  // true disparity + static departures; ≤ 0: no depth
+  // Maps shared between simulations (stereo_sim.cpp's caches), never changed once built: the
+  // depth counts of quantized disparity k·step, and the window's ray cast.
+  struct CountsTable;
+  struct CastMaps;
+  std::shared_ptr<const CountsTable> counts_table_;
+  std::shared_ptr<const CastMaps> cast_;
+  const std::uint16_t* counts_of_k_ = nullptr;  // in counts_table_
+  const float* true_depth_m_ = nullptr;         // in cast_
+  const unsigned char* surface_ = nullptr;      // in cast_
+  // True disparity + static departures (≤ 0: no depth): the cast's disparity when there are
+  // none.
+  std::shared_ptr<const std::vector<float>> static_disparity_px_;
   std::vector<float> mix_delta_px_;         // strength·(other side − own disparity)
   bool mixing_ = false;                     // edge mixing on: mix_delta_px_ is used
   std::vector<std::uint16_t> valid_threshold_;  // valid if a 12-bit uniform is below it
-  std::vector<float> true_depth_m_;
-  std::vector<unsigned char> surface_;
 };
 
 // The seed of one recording: a hash of the run's seed and the recording's name.
