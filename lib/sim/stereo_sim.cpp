@@ -549,7 +549,10 @@ struct Maps {
   float inv_step, k_min, k_end, offset, sigma;
 };
 
-template <bool kMixing>
+// kMasked: the count's index selected by a mask, not a branch (faster where holes are frequent
+// and unpredictable, as on the panel; the branch is faster over whole frames, where the pixels
+// that never give depth come in runs).
+template <bool kMixing, bool kMasked = false>
 inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
   const std::uint32_t uniform_valid = (bits >> kGaussBits) & ((1u << kValidBits) - 1);
   // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½). Single
@@ -564,7 +567,14 @@ inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
   // Valid and within [min, max] depth; counts_of_k[0] = 0 stands for "no depth". (Branch-free
   // forms of this select measured slower here than the branch.)
   const bool ok = (uniform_valid < m.valid_threshold[pixel]) & (x >= m.k_min) & (x < m.k_end);
-  return m.counts_of_k[ok ? static_cast<int>(x) : 0];
+  if constexpr (kMasked) {
+    // x clamped to [0, k_end] first (NaN to 0), so that its conversion is always defined; the
+    // same index wherever ok.
+    const int k = static_cast<int>(std::min(m.k_end, std::max(0.0f, x)));
+    return m.counts_of_k[k & -static_cast<int>(ok)];
+  } else {
+    return m.counts_of_k[ok ? static_cast<int>(x) : 0];
+  }
 }
 
 }  // namespace
@@ -642,7 +652,7 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
         pair = c >> 1;
         hash = Mix64(seed + pair * kGolden);
       }
-      out[i] = Draw<kMix>(m, HalfOf(hash, c), window[i]);
+      out[i] = Draw<kMix, true>(m, HalfOf(hash, c), window[i]);
     }
   };
   if (mixing_)
