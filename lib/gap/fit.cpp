@@ -23,6 +23,32 @@ inline double Robust(double r, double k, double* d) {
   return rt;
 }
 
+// simulations.cpp's Pchip with its Fritsch–Carlson slopes computed beforehand: the slope at
+// node j is Slope(x, y, n, j), and the value at t the same arithmetic as Pchip's.
+double Slope(const double* x, const double* y, int n, int j) {
+  auto secant = [&](int k) { return (y[k + 1] - y[k]) / (x[k + 1] - x[k]); };
+  if (j == 0) return secant(0);
+  if (j == n - 1) return secant(n - 2);
+  const double a = secant(j - 1), b = secant(j);
+  if (a * b <= 0) return 0.0;
+  const double ha = x[j] - x[j - 1], hb = x[j + 1] - x[j];
+  const double w1 = 2 * hb + ha, w2 = hb + 2 * ha;
+  return (w1 + w2) / (w1 / a + w2 / b);
+}
+
+double PchipWithSlopes(const double* x, const double* y, const double* m, int n, double t) {
+  if (n == 1) return y[0];
+  if (t <= x[0]) return y[0];
+  if (t >= x[n - 1]) return y[n - 1];
+  int i = static_cast<int>(std::upper_bound(x, x + n, t) - x) - 1;
+  i = std::clamp(i, 0, n - 2);
+  const double h = x[i + 1] - x[i], s = (t - x[i]) / h;
+  const double m0 = m[i] * h, m1 = m[i + 1] * h;
+  const double s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * y[i] + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * y[i + 1] +
+         (s3 - s2) * m1;
+}
+
 // Where the continuous coordinates of a fit live: one block per (term, used group), one per
 // fitted scenario's calibration.
 struct Layout {
@@ -47,6 +73,56 @@ class GapCost : public ceres::CostFunction {
     int priors = 0;
     for (int b : layout_.scenario_block) priors += b >= 0 ? 2 : 0;
     set_num_residuals(static_cast<int>(obs_.size()) + priors);
+    PrepareCurves();
+  }
+
+  // The curve GapModel::Delta interpolates for term t at observation obs_[i], with its slopes
+  // computed once for all the solver's evaluations: the term's one axis, or its second axis
+  // along the row of a discrete first one. Other terms (two continuous axes) go to Delta.
+  struct Curve {
+    const double* x = nullptr;  // node coordinates
+    const double* y = nullptr;  // the row of the surface's table
+    int n = 0;
+    int axis = 0;               // the coordinate interpolated
+    size_t slopes = 0;          // offset in slopes_
+  };
+  void PrepareCurves() {
+    const int k_count = model_.num_metrics();
+    curves_.assign(terms_.size(), {});
+    for (size_t t = 0; t < terms_.size(); ++t) {
+      const Term& term = terms_[t];
+      const Surface& surf = model_.surface(term.candidate);
+      const size_t axes = surf.candidate.axes.size();
+      curves_[t].resize(obs_.size());
+      for (size_t i = 0; i < obs_.size(); ++i) {
+        const size_t o = obs_[i];
+        const double* row = &surf.table[o * surf.num_nodes];
+        Curve& c = curves_[t][i];
+        if (axes == 1) {
+          c.x = model_.NodeCoords(term.candidate, 0).data();
+          c.y = row;
+          c.n = static_cast<int>(model_.NodeCoords(term.candidate, 0).size());
+        } else {
+          const int d0 = term.Discrete(model_.Group(term, static_cast<int>(o / k_count)), 0);
+          if (d0 < 0) continue;  // n = 0: Delta
+          const auto& x1 = model_.NodeCoords(term.candidate, 1);
+          c.x = x1.data();
+          c.n = static_cast<int>(x1.size());
+          c.y = row + static_cast<size_t>(d0) * c.n;
+          c.axis = 1;
+        }
+        c.slopes = slopes_.size();
+        for (int j = 0; j < c.n; ++j) slopes_.push_back(c.n > 1 ? Slope(c.x, c.y, c.n, j) : 0.0);
+      }
+    }
+  }
+
+  // GapModel::Delta(terms_[t], u, obs_[i]).
+  double Delta(size_t t, const double* u, size_t i) const {
+    const Curve& c = curves_[t][i];
+    const size_t o = obs_[i];
+    if (c.n == 0) return model_.Delta(terms_[t], u, o);
+    return PchipWithSlopes(c.x, c.y, &slopes_[c.slopes], c.n, u[c.axis]) - model_.sims().base[o];
   }
 
   // Coordinates of every axis of term t's group g at the current parameters.
@@ -78,7 +154,7 @@ class GapCost : public ceres::CostFunction {
       double mu = s.base[o];
       for (size_t t = 0; t < terms_.size(); ++t) {
         TermCoords(p, static_cast<int>(t), model_.Group(terms_[t], cell), u);
-        mu += model_.Delta(terms_[t], u, o);
+        mu += Delta(t, u, i);
       }
       const int nb = layout_.scenario_block[scen];
       if (nb >= 0) mu += s.jac_log_sigma[o] * p[nb][0] + s.jac_logit_p[o] * p[nb][1];
@@ -95,9 +171,9 @@ class GapCost : public ceres::CostFunction {
           const double h = 1e-3 * (nodes.back() - nodes.front());
           std::copy(u, u + 2, v);
           v[axes[j]] = u[axes[j]] + h;
-          const double up = model_.Delta(terms_[t], v, o);
+          const double up = Delta(t, v, i);
           v[axes[j]] = u[axes[j]] - h;
-          const double down = model_.Delta(terms_[t], v, o);
+          const double down = Delta(t, v, i);
           jac[b][i * axes.size() + j] = -(up - down) / (2 * h);
         }
       }
@@ -157,158 +233,11 @@ class GapCost : public ceres::CostFunction {
   GapModel::Whitening white_;
   const std::vector<size_t>& obs_;
   std::vector<std::vector<std::vector<double>>> fixed_;  // [term][group][axis] coordinates
+  std::vector<std::vector<Curve>> curves_;  // [term][position in obs_]
+  std::vector<double> slopes_;
 };
 
 }  // namespace
-
-bool FitSettings::IsValid(std::string* why) const {
-  if (!(tau_log_sigma > 0) || !(tau_logit_p > 0) || !std::isfinite(huber_k) ||
-      max_iterations < 1) {
-    if (why) *why = "fit settings: prior widths must be > 0, huber_k finite, iterations >= 1";
-    return false;
-  }
-  return true;
-}
-
-GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEstimate& noise,
-                   const FitSettings& settings, const PlacementEstimate* placement)
-    : design_(design), sims_(sims), settings_(settings) {
-  const bool blocks = placement && !placement->empty();
-  const int k_count = design.num_metrics();
-  const size_t n = design.real.size();
-  y_ = design.real;
-  sigma_.assign(n, NAN);
-  total_.assign(n, NAN);
-  block_.assign(n, -1);
-  valid_.assign(n, 0);
-  phi_.assign(k_count, 1.0);
-  for (int c = 0; c < design.num_cells(); ++c)
-    for (int k = 0; k < k_count; ++k) {
-      const size_t o = static_cast<size_t>(c) * k_count + k;
-      sigma_[o] = noise.Of(design, sims, c, k);
-      const double tau = blocks ? placement->Tau(k, c) : 0.0;
-      total_[o] = std::sqrt(sigma_[o] * sigma_[o] + tau * tau);
-      if (blocks) block_[o] = placement->point[c];
-      valid_[o] = std::isfinite(y_[o]) && std::isfinite(sims.base[o]) && sigma_[o] > 0 &&
-                  std::isfinite(total_[o]);
-    }
-  for (const Surface& s : sims.surfaces) {
-    std::vector<std::vector<double>> axes;
-    for (const Axis& a : s.candidate.axes) {
-      std::vector<double> c;
-      for (double v : a.nodes) c.push_back(a.log_scale ? std::log(v) : v);
-      axes.push_back(c);
-    }
-    coords_.push_back(axes);
-  }
-  absorbs_.assign(sims.surfaces.size(), 0);
-}
-
-int GapModel::Frozen(const std::vector<Term>& terms) const {
-  int mask = 0;
-  for (const Term& t : terms) mask |= absorbs_[t.candidate];
-  return mask;
-}
-
-double GapModel::weight(size_t obs) const {
-  return 1.0 / (total_[obs] * std::sqrt(phi_[obs % design_.num_metrics()]));
-}
-
-GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
-  const int k_count = num_metrics();
-  Whitening w;
-  w.obs = obs;
-  // Block key: (test point, metric); a recording without one stands alone.
-  auto key = [&](size_t o) {
-    return block_[o] < 0 ? std::make_pair(-1 - static_cast<long long>(o), 0)
-                         : std::make_pair(static_cast<long long>(block_[o]),
-                                          static_cast<int>(o % k_count));
-  };
-  std::stable_sort(w.obs.begin(), w.obs.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
-  for (size_t i = 0; i < w.obs.size();) {
-    size_t j = i;
-    while (j < w.obs.size() && key(w.obs[j]) == key(w.obs[i])) ++j;
-    const int n = static_cast<int>(j - i);
-    Eigen::MatrixXd cov(n, n);
-    for (int r = 0; r < n; ++r)
-      for (int c = 0; c < n; ++c) {
-        const size_t a = w.obs[i + r], b = w.obs[i + c];
-        const double phi = phi_[a % k_count];
-        const double ta = placement(a), tb = placement(b);
-        cov(r, c) = phi * (ta * tb + (r == c ? sigma_[a] * sigma_[a] : 0.0));
-      }
-    const Eigen::MatrixXd l = cov.llt().matrixL();
-    const Eigen::MatrixXd linv =
-        l.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(n, n));
-    std::vector<double> flat(static_cast<size_t>(n) * n, 0.0);
-    for (int r = 0; r < n; ++r)
-      for (int c = 0; c <= r; ++c) flat[r * n + c] = linv(r, c);
-    w.starts.push_back(static_cast<int>(i));
-    w.linv.push_back(std::move(flat));
-    i = j;
-  }
-  w.starts.push_back(static_cast<int>(w.obs.size()));
-  return w;
-}
-
-int GapModel::NumGroups(const Term& t) const {
-  return t.per_scenario ? design_.num_scenarios() : 1;
-}
-
-int GapModel::Group(const Term& t, int cell) const {
-  return t.per_scenario ? design_.scenario[cell] : 0;
-}
-
-double GapModel::ToCoord(int candidate, int axis, double value) const {
-  return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::log(value) : value;
-}
-
-double GapModel::FromCoord(int candidate, int axis, double coord) const {
-  return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::exp(coord) : coord;
-}
-
-double GapModel::Delta(const Term& term, const double* u, size_t obs) const {
-  const Surface& s = sims_.surfaces[term.candidate];
-  const auto& axes = coords_[term.candidate];
-  const double* row = &s.table[obs * s.num_nodes];
-  double value;
-  if (axes.size() == 1) {
-    value = Pchip(axes[0].data(), row, static_cast<int>(axes[0].size()), u[0]);
-  } else {
-    const int n0 = static_cast<int>(axes[0].size()), n1 = static_cast<int>(axes[1].size());
-    const int group = Group(term, static_cast<int>(obs / design_.num_metrics()));
-    const int d0 = term.Discrete(group, 0), d1 = term.Discrete(group, 1);
-    if (d0 >= 0) {
-      value = Pchip(axes[1].data(), row + d0 * n1, n1, u[1]);
-    } else {
-      double along[64];
-      for (int i = 0; i < n0; ++i)
-        along[i] = d1 >= 0 ? row[i * n1 + d1] : Pchip(axes[1].data(), row + i * n1, n1, u[1]);
-      value = Pchip(axes[0].data(), along, n0, u[0]);
-    }
-  }
-  return value - sims_.base[obs];
-}
-
-std::vector<double> GapModel::Predict(const ModelFit& fit) const {
-  const int k_count = num_metrics();
-  std::vector<double> mu(sims_.base);
-  double u[2];
-  for (size_t o = 0; o < mu.size(); ++o) {
-    const int cell = static_cast<int>(o / k_count);
-    for (const TermFit& t : fit.terms) {
-      const auto& values = t.values[Group(t.term, cell)];
-      for (size_t a = 0; a < values.size(); ++a)
-        u[a] = ToCoord(t.term.candidate, static_cast<int>(a), values[a]);
-      mu[o] += Delta(t.term, u, o);
-    }
-    if (!fit.nuisance.empty()) {
-      const auto& n = fit.nuisance[design_.scenario[cell]];
-      mu[o] += sims_.jac_log_sigma[o] * n[0] + sims_.jac_logit_p[o] * n[1];
-    }
-  }
-  return mu;
-}
 
 double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells) const {
   const int k_count = num_metrics();
