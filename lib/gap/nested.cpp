@@ -69,7 +69,9 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
         params.placement ? EstimatePlacement(d, sims, noise, train, params.placement_alpha)
                          : PlacementEstimate();
     GapModel model(d, sims, noise, params.fit, &placement);
-    const Selection sel = Select(model, train, fold, num_folds, params);
+    DiagnoseParams one_thread = params;  // the folds run side by side
+    one_thread.simulate.threads = 1;
+    const Selection sel = Select(model, train, fold, num_folds, one_thread);
     if (!sel.success) throw std::invalid_argument(sel.message);
     for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
     const std::vector<double> mu0 = model.Predict(sel.m0), mu1 = model.Predict(sel.current);

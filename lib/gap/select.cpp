@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 
+#include "common/parallel.h"
+
 namespace depthbias::gap {
 namespace {
 
@@ -202,17 +204,36 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
     model.SetAbsorbs(i, (r.r2_sigma[i] >= r2_limit ? 1 : 0) | (r.r2_p[i] >= r2_limit ? 2 : 0));
   }
 
-  // Every candidate alone, shared and per scenario.
+  // Every candidate alone, shared and per scenario. The fits read the model alone and run side
+  // by side (params.simulate.threads); their results are taken in the candidates' order.
+  const GapModel& fixed = model;
+  const int threads = params.simulate.threads;
+  auto dbic = [&](const ModelFit& f) {
+    return f.success ? m0.Deviance() - f.Deviance() - (f.num_params - m0.num_params) * log_n
+                     : -INFINITY;
+  };
+  struct Alone {
+    ModelFit shared, per;
+    HeldOut ho;
+    std::vector<double> mu;
+  };
+  std::vector<Alone> alone(n_cand);
+  common::ForEachIndex(static_cast<size_t>(n_cand), threads, [&](size_t k) {
+    const int i = static_cast<int>(k);
+    Alone& a = alone[k];
+    a.shared = FitCandidate(fixed, i, false, train);
+    if (design.num_scenarios() > 1) a.per = FitCandidate(fixed, i, true, train, &a.shared);
+    if (!a.shared.success && !a.per.success) return;
+    const double per_bic = a.per.success ? dbic(a.per) : -INFINITY;
+    const ModelFit& f = per_bic > dbic(a.shared) ? a.per : a.shared;
+    a.ho = CrossValidate(fixed, {f.terms[0].term}, fold, num_folds, f, train);
+    if (a.ho.success) a.mu = fixed.Predict(f);
+  });
   for (int i = 0; i < n_cand; ++i) {
     EffectResult e;
     e.name = sims.surfaces[i].candidate.effect;
-    ModelFit shared = FitCandidate(model, i, false, train);
-    ModelFit per;
-    if (design.num_scenarios() > 1) per = FitCandidate(model, i, true, train, &shared);
-    auto dbic = [&](const ModelFit& f) {
-      return f.success ? m0.Deviance() - f.Deviance() - (f.num_params - m0.num_params) * log_n
-                       : -INFINITY;
-    };
+    const ModelFit& shared = alone[i].shared;
+    const ModelFit& per = alone[i].per;
     e.delta_bic_shared = dbic(shared);
     e.delta_bic_per_scenario = per.success ? dbic(per) : -INFINITY;
     if (!shared.success && !per.success) {
@@ -223,13 +244,13 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
     const ModelFit& f = e.per_scenario ? per : shared;
     e.fit = f.terms[0];
     e.delta_bic = std::max(e.delta_bic_shared, e.delta_bic_per_scenario);
-    const HeldOut ho = CrossValidate(model, {e.fit.term}, fold, num_folds, f, train);
+    const HeldOut& ho = alone[i].ho;
     if (!ho.success) {
       r.message = e.name + ": " + ho.message;
       return r;
     }
     e.heldout_gain = m0_ho.data_deviance - ho.data_deviance;
-    e.in_sample = Stat(model, Scaled(model, model.Predict(f)), train);
+    e.in_sample = Stat(model, Scaled(model, alone[i].mu), train);
     e.heldout = Stat(model, Scaled(model, ho.mu), ho.cells);
     e.shrink_in_sample_pct = Shrink(baseline, e.in_sample);
     e.shrink_heldout_pct = Shrink(Stat(model, z_base, ho.cells), e.heldout);
@@ -280,26 +301,45 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
     double best_dbic = 0, best_gain = 0;  // the largest held-out gain among those earning both
     ModelFit best_fit;
     HeldOut best_ho;
+    std::vector<int> open;  // the candidates tried at this step, in order
     for (int i : order) {
       if (model.Absorbs(i)) continue;
       if (std::find(r.chosen.begin(), r.chosen.end(), i) != r.chosen.end()) continue;
       bool clash = false;
       for (int j : r.chosen) clash = clash || confounded(i, j);
       if (clash) continue;
+      open.push_back(i);
+    }
+    // The trials side by side, judged in order.
+    struct Trial {
+      ModelFit fit;
+      double dbic = 0;
+      HeldOut ho;
+    };
+    std::vector<Trial> trials(open.size());
+    common::ForEachIndex(open.size(), threads, [&](size_t k) {
+      const int i = open[k];
+      Trial& t = trials[k];
       std::vector<Term> trial = terms;
       trial.push_back(r.effects[i].fit.term);
       ModelFit start = current;
       start.terms.push_back(r.effects[i].fit);
-      const ModelFit f = FitTerms(model, trial, train, &start);
-      if (!f.success) continue;
-      const double dbic =
-          current.Deviance() - f.Deviance() - (f.num_params - current.num_params) * log_n;
-      if (dbic <= 0) continue;
-      HeldOut ho = CrossValidate(model, trial, fold, num_folds, f, train);
-      if (!ho.success) continue;
-      const double gain = current_ho.data_deviance - ho.data_deviance;
+      t.fit = FitTerms(fixed, trial, train, &start);
+      if (!t.fit.success) return;
+      t.dbic = current.Deviance() - t.fit.Deviance() -
+               (t.fit.num_params - current.num_params) * log_n;
+      if (t.dbic <= 0) return;
+      t.ho = CrossValidate(fixed, trial, fold, num_folds, t.fit, train);
+    });
+    for (size_t k = 0; k < open.size(); ++k) {
+      Trial& t = trials[k];
+      if (!t.fit.success) continue;
+      if (t.dbic <= 0) continue;
+      if (!t.ho.success) continue;
+      const double gain = current_ho.data_deviance - t.ho.data_deviance;
       if (gain <= best_gain) continue;
-      best = i, best_dbic = dbic, best_gain = gain, best_fit = f, best_ho = std::move(ho);
+      best = open[k], best_dbic = t.dbic, best_gain = gain, best_fit = t.fit,
+      best_ho = std::move(t.ho);
     }
     if (best < 0) break;
     r.chosen.push_back(best);
