@@ -74,6 +74,41 @@ class GapCost : public ceres::CostFunction {
     for (int b : layout_.scenario_block) priors += b >= 0 ? 2 : 0;
     set_num_residuals(static_cast<int>(obs_.size()) + priors);
     PrepareCurves();
+    PrepareCalibration();
+  }
+
+  // Whitening block w (L⁻¹ lower triangular) applied to one column (rows `stride` apart).
+  void Whiten(size_t w, double* col, size_t stride, double* tmp) const {
+    const int st = white_.starts[w], n = white_.starts[w + 1] - st;
+    const double* l = white_.linv[w].data();
+    for (int r = 0; r < n; ++r) {
+      double sum = 0;
+      for (int c = 0; c <= r; ++c) sum += l[r * n + c] * col[(st + c) * stride];
+      tmp[r] = sum;
+    }
+    for (int r = 0; r < n; ++r) col[(st + r) * stride] = tmp[r];
+  }
+
+  // The calibration blocks' Jacobian, −J of their scenario's observations whitened, does not
+  // depend on the parameters: made once, copied at each evaluation before Huber's scaling.
+  void PrepareCalibration() {
+    const Simulations& s = model_.sims();
+    const int k_count = model_.num_metrics();
+    calibration_.assign(layout_.blocks.size(), {});
+    for (int nb : layout_.scenario_block)
+      if (nb >= 0) calibration_[nb].assign(static_cast<size_t>(num_residuals()) * 2, 0.0);
+    for (size_t i = 0; i < obs_.size(); ++i) {
+      const size_t o = obs_[i];
+      const int nb = layout_.scenario_block[model_.design().scenario[o / k_count]];
+      if (nb < 0) continue;
+      calibration_[nb][i * 2] = -s.jac_log_sigma[o];
+      calibration_[nb][i * 2 + 1] = -s.jac_logit_p[o];
+    }
+    std::vector<double> tmp(obs_.size());
+    for (size_t w = 0; w + 1 < white_.starts.size(); ++w)
+      for (auto& column : calibration_)
+        if (!column.empty())
+          for (int j = 0; j < 2; ++j) Whiten(w, column.data() + j, 2, tmp.data());
   }
 
   // The curve GapModel::Delta interpolates for term t at observation obs_[i], with its slopes
@@ -141,9 +176,13 @@ class GapCost : public ceres::CostFunction {
     const Simulations& s = model_.sims();
     const size_t nb_count = layout_.blocks.size();
     if (jac) {
-      for (size_t b = 0; b < nb_count; ++b)
-        if (jac[b])
+      for (size_t b = 0; b < nb_count; ++b) {
+        if (!jac[b]) continue;
+        if (!calibration_[b].empty())
+          std::copy(calibration_[b].begin(), calibration_[b].end(), jac[b]);
+        else
           std::fill(jac[b], jac[b] + num_residuals() * parameter_block_sizes()[b], 0.0);
+      }
     }
     // Raw residuals y − μ and their derivatives −∂μ/∂p.
     double u[2], v[2];
@@ -177,30 +216,17 @@ class GapCost : public ceres::CostFunction {
           jac[b][i * axes.size() + j] = -(up - down) / (2 * h);
         }
       }
-      if (nb >= 0 && jac[nb]) {
-        jac[nb][i * 2] = -s.jac_log_sigma[o];
-        jac[nb][i * 2 + 1] = -s.jac_logit_p[o];
-      }
     }
-    // Whitened block by block (L⁻¹ lower triangular), then Huber's loss row by row.
+    // Whitened block by block (the calibration blocks are already), then Huber's loss row by
+    // row.
     std::vector<double> tmp(obs_.size());
     for (size_t w = 0; w + 1 < white_.starts.size(); ++w) {
-      const int st = white_.starts[w], n = white_.starts[w + 1] - st;
-      const double* l = white_.linv[w].data();
-      auto apply = [&](double* col, size_t stride) {
-        for (int r = 0; r < n; ++r) {
-          double sum = 0;
-          for (int c = 0; c <= r; ++c) sum += l[r * n + c] * col[(st + c) * stride];
-          tmp[r] = sum;
-        }
-        for (int r = 0; r < n; ++r) col[(st + r) * stride] = tmp[r];
-      };
-      apply(residuals, 1);
+      Whiten(w, residuals, 1, tmp.data());
       if (!jac) continue;
       for (size_t b = 0; b < nb_count; ++b) {
-        if (!jac[b]) continue;
+        if (!jac[b] || !calibration_[b].empty()) continue;
         const int size = parameter_block_sizes()[b];
-        for (int j = 0; j < size; ++j) apply(jac[b] + j, size);
+        for (int j = 0; j < size; ++j) Whiten(w, jac[b] + j, size, tmp.data());
       }
     }
     for (size_t i = 0; i < obs_.size(); ++i) {
@@ -235,6 +261,7 @@ class GapCost : public ceres::CostFunction {
   std::vector<std::vector<std::vector<double>>> fixed_;  // [term][group][axis] coordinates
   std::vector<std::vector<Curve>> curves_;  // [term][position in obs_]
   std::vector<double> slopes_;
+  std::vector<std::vector<double>> calibration_;  // [block]: a calibration block's Jacobian
 };
 
 }  // namespace
