@@ -1,6 +1,7 @@
 #include "gap/fit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -23,8 +24,9 @@ inline double Robust(double r, double k, double* d) {
   return rt;
 }
 
-// simulations.cpp's Pchip with its Fritsch–Carlson slopes computed beforehand: the slope at
-// node j is Slope(x, y, n, j), and the value at t the same arithmetic as Pchip's.
+// simulations.cpp's Pchip in parts, with the same arithmetic: the Fritsch–Carlson slope at node
+// j of a curve (Slope), where t falls among the nodes and its Hermite weights (a Stencil, the
+// same for every curve on those nodes), and a curve's value from them (Interpolate).
 double Slope(const double* x, const double* y, int n, int j) {
   auto secant = [&](int k) { return (y[k + 1] - y[k]) / (x[k + 1] - x[k]); };
   if (j == 0) return secant(0);
@@ -36,17 +38,39 @@ double Slope(const double* x, const double* y, int n, int j) {
   return (w1 + w2) / (w1 / a + w2 / b);
 }
 
-double PchipWithSlopes(const double* x, const double* y, const double* m, int n, double t) {
-  if (n == 1) return y[0];
-  if (t <= x[0]) return y[0];
-  if (t >= x[n - 1]) return y[n - 1];
+struct Stencil {
+  int node = 0;  // ≥ 0: the value is y[node] (t at or beyond an end); −1: interval i
+  int i = 0;
+  double h = 0;
+  double w[4] = {0, 0, 0, 0};  // weights of y[i], m[i]·h, y[i + 1], m[i + 1]·h
+};
+
+Stencil StencilAt(const double* x, int n, double t) {
+  Stencil st;
+  if (n == 1 || t <= x[0]) return st;
+  if (t >= x[n - 1]) {
+    st.node = n - 1;
+    return st;
+  }
   int i = static_cast<int>(std::upper_bound(x, x + n, t) - x) - 1;
   i = std::clamp(i, 0, n - 2);
   const double h = x[i + 1] - x[i], s = (t - x[i]) / h;
-  const double m0 = m[i] * h, m1 = m[i + 1] * h;
   const double s2 = s * s, s3 = s2 * s;
-  return (2 * s3 - 3 * s2 + 1) * y[i] + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * y[i + 1] +
-         (s3 - s2) * m1;
+  st.node = -1;
+  st.i = i;
+  st.h = h;
+  st.w[0] = 2 * s3 - 3 * s2 + 1;
+  st.w[1] = s3 - 2 * s2 + s;
+  st.w[2] = -2 * s3 + 3 * s2;
+  st.w[3] = s3 - s2;
+  return st;
+}
+
+double Interpolate(const Stencil& st, const double* y, const double* m) {
+  if (st.node >= 0) return y[st.node];
+  const int i = st.i;
+  const double m0 = m[i] * st.h, m1 = m[i + 1] * st.h;
+  return st.w[0] * y[i] + st.w[1] * m0 + st.w[2] * y[i + 1] + st.w[3] * m1;
 }
 
 // Where the continuous coordinates of a fit live: one block per (term, used group), one per
@@ -93,13 +117,12 @@ class GapCost : public ceres::CostFunction {
   // depend on the parameters: made once, copied at each evaluation before Huber's scaling.
   void PrepareCalibration() {
     const Simulations& s = model_.sims();
-    const int k_count = model_.num_metrics();
     calibration_.assign(layout_.blocks.size(), {});
     for (int nb : layout_.scenario_block)
       if (nb >= 0) calibration_[nb].assign(static_cast<size_t>(num_residuals()) * 2, 0.0);
     for (size_t i = 0; i < obs_.size(); ++i) {
       const size_t o = obs_[i];
-      const int nb = layout_.scenario_block[model_.design().scenario[o / k_count]];
+      const int nb = scenario_block_[i];
       if (nb < 0) continue;
       calibration_[nb][i * 2] = -s.jac_log_sigma[o];
       calibration_[nb][i * 2 + 1] = -s.jac_logit_p[o];
@@ -113,51 +136,89 @@ class GapCost : public ceres::CostFunction {
 
   // The curve GapModel::Delta interpolates for term t at observation obs_[i], with its slopes
   // computed once for all the solver's evaluations: the term's one axis, or its second axis
-  // along the row of a discrete first one. Other terms (two continuous axes) go to Delta.
+  // along the row of a discrete first one (the term's nodes x_[t], n_[t], along axis_[t]).
+  // Other terms (two continuous axes) go to GapModel::Delta (n_[t] = 0 or y = nullptr).
   struct Curve {
-    const double* x = nullptr;  // node coordinates
     const double* y = nullptr;  // the row of the surface's table
-    int n = 0;
-    int axis = 0;               // the coordinate interpolated
     size_t slopes = 0;          // offset in slopes_
   };
   void PrepareCurves() {
     const int k_count = model_.num_metrics();
     curves_.assign(terms_.size(), {});
+    x_.assign(terms_.size(), nullptr);
+    n_.assign(terms_.size(), 0);
+    axis_.assign(terms_.size(), 0);
+    stencil_offset_.assign(terms_.size() + 1, 0);
+    group_.assign(terms_.size(), {});
+    step_.assign(terms_.size(), {0, 0});
+    scenario_block_.resize(obs_.size());
+    for (size_t i = 0; i < obs_.size(); ++i)
+      scenario_block_[i] =
+          layout_.scenario_block[model_.design().scenario[obs_[i] / k_count]];
     for (size_t t = 0; t < terms_.size(); ++t) {
       const Term& term = terms_[t];
       const Surface& surf = model_.surface(term.candidate);
       const size_t axes = surf.candidate.axes.size();
+      stencil_offset_[t + 1] = stencil_offset_[t] + model_.NumGroups(term);
+      for (size_t a = 0; a < axes; ++a) {
+        const auto& nodes = model_.NodeCoords(term.candidate, static_cast<int>(a));
+        step_[t][a] = 1e-3 * (nodes.back() - nodes.front());
+      }
+      group_[t].resize(obs_.size());
+      for (size_t i = 0; i < obs_.size(); ++i)
+        group_[t][i] = model_.Group(term, static_cast<int>(obs_[i] / k_count));
+      axis_[t] = axes == 1 ? 0 : 1;
+      const auto& x = model_.NodeCoords(term.candidate, axis_[t]);
+      x_[t] = x.data();
+      n_[t] = static_cast<int>(x.size());
       curves_[t].resize(obs_.size());
       for (size_t i = 0; i < obs_.size(); ++i) {
         const size_t o = obs_[i];
         const double* row = &surf.table[o * surf.num_nodes];
         Curve& c = curves_[t][i];
         if (axes == 1) {
-          c.x = model_.NodeCoords(term.candidate, 0).data();
           c.y = row;
-          c.n = static_cast<int>(model_.NodeCoords(term.candidate, 0).size());
         } else {
           const int d0 = term.Discrete(model_.Group(term, static_cast<int>(o / k_count)), 0);
-          if (d0 < 0) continue;  // n = 0: Delta
-          const auto& x1 = model_.NodeCoords(term.candidate, 1);
-          c.x = x1.data();
-          c.n = static_cast<int>(x1.size());
-          c.y = row + static_cast<size_t>(d0) * c.n;
-          c.axis = 1;
+          if (d0 < 0) continue;  // no curve: Delta
+          c.y = row + static_cast<size_t>(d0) * n_[t];
         }
         c.slopes = slopes_.size();
-        for (int j = 0; j < c.n; ++j) slopes_.push_back(c.n > 1 ? Slope(c.x, c.y, c.n, j) : 0.0);
+        for (int j = 0; j < n_[t]; ++j)
+          slopes_.push_back(n_[t] > 1 ? Slope(x_[t], c.y, n_[t], j) : 0.0);
       }
     }
   }
 
-  // GapModel::Delta(terms_[t], u, obs_[i]).
-  double Delta(size_t t, const double* u, size_t i) const {
+  // A term's group at the parameters: its coordinates, and its stencils at them and a step
+  // either side along its interpolated axis (the Jacobian's central differences).
+  struct At {
+    double u[2] = {0, 0};
+    Stencil st[3];
+  };
+  std::vector<At> Coordinates(double const* const* p) const {
+    std::vector<At> out(stencil_offset_.back());
+    for (size_t t = 0; t < terms_.size(); ++t) {
+      const int ax = axis_[t];
+      const double h = step_[t][ax];
+      for (int g = 0; g < stencil_offset_[t + 1] - stencil_offset_[t]; ++g) {
+        At& a = out[stencil_offset_[t] + g];
+        TermCoords(p, static_cast<int>(t), g, a.u);
+        a.st[0] = StencilAt(x_[t], n_[t], a.u[ax]);
+        a.st[1] = StencilAt(x_[t], n_[t], a.u[ax] + h);
+        a.st[2] = StencilAt(x_[t], n_[t], a.u[ax] - h);
+      }
+    }
+    return out;
+  }
+
+  // GapModel::Delta of term t at observation obs_[i]: from stencil k (curves), else at the
+  // coordinates u.
+  double Delta(const Stencil& st, size_t t, const double* u, size_t i) const {
     const Curve& c = curves_[t][i];
     const size_t o = obs_[i];
-    if (c.n == 0) return model_.Delta(terms_[t], u, o);
-    return PchipWithSlopes(c.x, c.y, &slopes_[c.slopes], c.n, u[c.axis]) - model_.sims().base[o];
+    if (!c.y) return model_.Delta(terms_[t], u, o);
+    return Interpolate(st, c.y, &slopes_[c.slopes]) - model_.sims().base[o];
   }
 
   // Coordinates of every axis of term t's group g at the current parameters.
@@ -171,7 +232,6 @@ class GapCost : public ceres::CostFunction {
   }
 
   bool Evaluate(double const* const* p, double* residuals, double** jac) const override {
-    const int k_count = model_.num_metrics();
     const double huber = model_.settings().huber_k;
     const Simulations& s = model_.sims();
     const size_t nb_count = layout_.blocks.size();
@@ -185,34 +245,33 @@ class GapCost : public ceres::CostFunction {
       }
     }
     // Raw residuals y − μ and their derivatives −∂μ/∂p.
-    double u[2], v[2];
+    const std::vector<At> at = Coordinates(p);
+    double v[2];
     for (size_t i = 0; i < obs_.size(); ++i) {
       const size_t o = obs_[i];
-      const int cell = static_cast<int>(o / k_count);
-      const int scen = model_.design().scenario[cell];
       double mu = s.base[o];
       for (size_t t = 0; t < terms_.size(); ++t) {
-        TermCoords(p, static_cast<int>(t), model_.Group(terms_[t], cell), u);
-        mu += Delta(t, u, i);
+        const At& a = at[stencil_offset_[t] + group_[t][i]];
+        mu += Delta(a.st[0], t, a.u, i);
       }
-      const int nb = layout_.scenario_block[scen];
+      const int nb = scenario_block_[i];
       if (nb >= 0) mu += s.jac_log_sigma[o] * p[nb][0] + s.jac_logit_p[o] * p[nb][1];
       residuals[i] = model_.y(o) - mu;
       if (!jac) continue;
       for (size_t t = 0; t < terms_.size(); ++t) {
-        const int grp = model_.Group(terms_[t], cell);
+        const int grp = group_[t][i];
         const int b = layout_.term_block[t][grp];
         if (b < 0 || !jac[b]) continue;
         const auto& axes = layout_.blocks[b].axes;
-        TermCoords(p, static_cast<int>(t), grp, u);
+        const At& a = at[stencil_offset_[t] + grp];
         for (size_t j = 0; j < axes.size(); ++j) {
-          const std::vector<double>& nodes = model_.NodeCoords(terms_[t].candidate, axes[j]);
-          const double h = 1e-3 * (nodes.back() - nodes.front());
-          std::copy(u, u + 2, v);
-          v[axes[j]] = u[axes[j]] + h;
-          const double up = Delta(t, v, i);
-          v[axes[j]] = u[axes[j]] - h;
-          const double down = Delta(t, v, i);
+          const double h = step_[t][axes[j]];
+          const bool along = axes[j] == axis_[t];  // the stencils' steps
+          std::copy(a.u, a.u + 2, v);
+          v[axes[j]] = a.u[axes[j]] + h;
+          const double up = along ? Delta(a.st[1], t, v, i) : model_.Delta(terms_[t], v, o);
+          v[axes[j]] = a.u[axes[j]] - h;
+          const double down = along ? Delta(a.st[2], t, v, i) : model_.Delta(terms_[t], v, o);
           jac[b][i * axes.size() + j] = -(up - down) / (2 * h);
         }
       }
@@ -261,6 +320,12 @@ class GapCost : public ceres::CostFunction {
   std::vector<std::vector<std::vector<double>>> fixed_;  // [term][group][axis] coordinates
   std::vector<std::vector<Curve>> curves_;  // [term][position in obs_]
   std::vector<double> slopes_;
+  std::vector<const double*> x_;            // [term]
+  std::vector<int> n_, axis_;               // [term]
+  std::vector<int> stencil_offset_;         // [term]: its groups' first entry of Coordinates
+  std::vector<std::vector<int>> group_;     // [term][position in obs_]
+  std::vector<std::array<double, 2>> step_; // [term][axis]: the Jacobian's step
+  std::vector<int> scenario_block_;         // [position in obs_]: its calibration block or −1
   std::vector<std::vector<double>> calibration_;  // [block]: a calibration block's Jacobian
 };
 
