@@ -24,20 +24,9 @@ inline double Robust(double r, double k, double* d) {
   return rt;
 }
 
-// simulations.cpp's Pchip in parts, with the same arithmetic: the Fritsch–Carlson slope at node
-// j of a curve (Slope), where t falls among the nodes and its Hermite weights (a Stencil, the
-// same for every curve on those nodes), and a curve's value from them (Interpolate).
-double Slope(const double* x, const double* y, int n, int j) {
-  auto secant = [&](int k) { return (y[k + 1] - y[k]) / (x[k + 1] - x[k]); };
-  if (j == 0) return secant(0);
-  if (j == n - 1) return secant(n - 2);
-  const double a = secant(j - 1), b = secant(j);
-  if (a * b <= 0) return 0.0;
-  const double ha = x[j] - x[j - 1], hb = x[j + 1] - x[j];
-  const double w1 = 2 * hb + ha, w2 = hb + 2 * ha;
-  return (w1 + w2) / (w1 / a + w2 / b);
-}
-
+// simulations.cpp's Pchip in parts, with the same arithmetic and its slopes (PchipSlope): where
+// t falls among the nodes and its Hermite weights (a Stencil, the same for every curve on those
+// nodes), and a curve's value from them (Interpolate).
 struct Stencil {
   int node = 0;  // ≥ 0: the value is y[node] (t at or beyond an end); −1: interval i
   int i = 0;
@@ -185,7 +174,7 @@ class GapCost : public ceres::CostFunction {
         }
         c.slopes = slopes_.size();
         for (int j = 0; j < n_[t]; ++j)
-          slopes_.push_back(n_[t] > 1 ? Slope(x_[t], c.y, n_[t], j) : 0.0);
+          slopes_.push_back(n_[t] > 1 ? PchipSlope(x_[t], c.y, n_[t], j) : 0.0);
       }
     }
   }

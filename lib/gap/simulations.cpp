@@ -188,26 +188,25 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
   return s;
 }
 
+double PchipSlope(const double* x, const double* y, int n, int j) {
+  auto secant = [&](int k) { return (y[k + 1] - y[k]) / (x[k + 1] - x[k]); };
+  if (j == 0) return secant(0);
+  if (j == n - 1) return secant(n - 2);
+  const double a = secant(j - 1), b = secant(j);
+  if (a * b <= 0) return 0.0;
+  const double ha = x[j] - x[j - 1], hb = x[j + 1] - x[j];
+  const double w1 = 2 * hb + ha, w2 = hb + 2 * ha;
+  return (w1 + w2) / (w1 / a + w2 / b);
+}
+
 double Pchip(const double* x, const double* y, int n, double t) {
   if (n == 1) return y[0];
   if (t <= x[0]) return y[0];
   if (t >= x[n - 1]) return y[n - 1];
   int i = static_cast<int>(std::upper_bound(x, x + n, t) - x) - 1;
   i = std::clamp(i, 0, n - 2);
-  auto secant = [&](int j) { return (y[j + 1] - y[j]) / (x[j + 1] - x[j]); };
-  // Fritsch–Carlson slopes: the weighted harmonic mean of the neighbouring secants, 0 where
-  // they differ in sign (no overshoot); one-sided at the ends.
-  auto slope = [&](int j) {
-    if (j == 0) return secant(0);
-    if (j == n - 1) return secant(n - 2);
-    const double a = secant(j - 1), b = secant(j);
-    if (a * b <= 0) return 0.0;
-    const double ha = x[j] - x[j - 1], hb = x[j + 1] - x[j];
-    const double w1 = 2 * hb + ha, w2 = hb + 2 * ha;
-    return (w1 + w2) / (w1 / a + w2 / b);
-  };
   const double h = x[i + 1] - x[i], s = (t - x[i]) / h;
-  const double m0 = slope(i) * h, m1 = slope(i + 1) * h;
+  const double m0 = PchipSlope(x, y, n, i) * h, m1 = PchipSlope(x, y, n, i + 1) * h;
   const double s2 = s * s, s3 = s2 * s;
   return (2 * s3 - 3 * s2 + 1) * y[i] + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * y[i + 1] +
          (s3 - s2) * m1;

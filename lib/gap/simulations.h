@@ -68,4 +68,8 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
 // t clamped to [x[0], x[n − 1]].
 double Pchip(const double* x, const double* y, int n, double t);
 
+// Pchip's slope at node j: the weighted harmonic mean of the neighbouring secants, 0 where they
+// differ in sign (no overshoot); one-sided at the ends.
+double PchipSlope(const double* x, const double* y, int n, int j);
+
 }  // namespace depthbias::gap
