@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
+
 #include "metrics/region_metrics.h"
 #include "common/parallel.h"
 #include "sim/sim_metrics.h"
@@ -13,8 +15,12 @@
 namespace depthbias::sim {
 namespace {
 
-// The panel's image bounding box, padded by pad px and clipped to the image; empty if the panel
-// is not in front of the camera.
+// Range under-read (as a share of the panel's size) up to which the panel's window, laid on the
+// measured plane, is rendered whole; beyond it the window is cut to the rendered pixels.
+constexpr double kUnderReadCover = 0.10;
+
+// The panel's image bounding box, padded by pad px (and kUnderReadCover) and clipped to the
+// image; empty if the panel is not in front of the camera.
 Window PanelWindow(const SimParams& params, const Cell& cell, int pad) {
   const PanelPose pose = PlacePanel(params.protocol.scene, params.protocol.distance_is, cell,
                                     params.departures.range_vs_depth_weight,
@@ -33,12 +39,137 @@ Window PanelWindow(const SimParams& params, const Cell& cell, int pad) {
       v_lo = std::min(v_lo, v);
       v_hi = std::max(v_hi, v);
     }
+  // The panel's window laid on a plane measured nearer than the truth covers more than the
+  // panel's footprint: the window takes in kUnderReadCover of the panel's size around it.
+  pad += static_cast<int>(std::ceil(0.5 * kUnderReadCover * std::max(u_hi - u_lo, v_hi - v_lo)));
   const int u0 = std::max(0, static_cast<int>(std::floor(u_lo)) - pad);
   const int v0 = std::max(0, static_cast<int>(std::floor(v_lo)) - pad);
   const int u1 = std::min(in.width, static_cast<int>(std::ceil(u_hi)) + pad + 1);
   const int v1 = std::min(in.height, static_cast<int>(std::ceil(v_hi)) + pad + 1);
   if (u1 <= u0 || v1 <= v0) return Window{};
   return Window{u0, v0, u1 - u0, v1 - v0};
+}
+
+// The panel's known size (true_rect's) at the depth the measured plane gives the panel's centre:
+// the true rectangle moved along the rays by the ratio of that depth to the true one, its size
+// kept. panel_extract's window is the panel's known size on its measured plane, placed on the
+// panel it sees, so its extent in the image follows the range error (fewer pixels when
+// over-read, the background around the panel taken in when under-read). The orientation is the
+// true one: a plane measured on a far, noisy panel may turn by degrees about its centre, which
+// panel_extract's RANSAC over the whole scene does not follow. rect unchanged when the plane
+// misses the centre's ray.
+void WindowOnPlane(const metrics::Plane& plane, const metrics::PanelRectangle& true_rect,
+                   metrics::PanelRectangle* rect) {
+  const Eigen::Vector3d ray = true_rect.center_m / true_rect.center_m.z();
+  const double z = plane.DepthOnRay(ray);
+  if (!std::isfinite(z) || !(z > 0)) return;
+  const double scale = z / true_rect.center_m.z();
+  metrics::PanelRectangle r = true_rect;
+  r.center_m = scale * true_rect.center_m;
+  r.plane.offset_m = scale * true_rect.plane.offset_m;
+  *rect = r;
+}
+
+// The plane 1/Z = k·(x/z, y/z, 1) of the pixels' pooled mean depths, each weighted by its
+// samples (least squares for noise along the rays, as metrics::DecidePanelPixels fits it); false
+// for fewer than 3 observed pixels or a degenerate system.
+bool FitPooledPlane(const camera::Intrinsics& in, const std::vector<std::uint32_t>& pixels,
+                    const std::vector<metrics::PooledPixel>& pooled, double depth_units_m,
+                    metrics::Plane* plane) {
+  const metrics::PixelNormalizer normalized(in);
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  int used = 0;
+  for (std::size_t k = 0; k < pixels.size(); ++k) {
+    if (pooled[k].count == 0 || pooled[k].sum_counts == 0) continue;
+    const Eigen::Vector2d r = normalized.OfIndex(pixels[k]);
+    const Eigen::Vector3d a(r.x(), r.y(), 1.0);
+    const double n = pooled[k].count;
+    const double mean_m = static_cast<double>(pooled[k].sum_counts) / n * depth_units_m;
+    ata += n * a * a.transpose();
+    atb += (n / mean_m) * a;
+    ++used;
+  }
+  if (used < 3) return false;
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+  const Eigen::Vector3d k = ldlt.solve(atb);
+  const double len = k.norm();
+  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12) || !std::isfinite(len) ||
+      !(len > 0))
+    return false;
+  plane->normal = -k / len;
+  plane->offset_m = 1.0 / len;
+  return true;
+}
+
+// Depth counts of `frames` frames of pixels, frame after frame.
+void RenderFrames(const StereoSim& sim, const PixelList& pixels, int frames,
+                  std::vector<std::uint16_t>* out) {
+  const std::size_t n = pixels.size();
+  out->assign(static_cast<std::size_t>(frames) * n, 0);
+  std::vector<std::uint16_t> counts;
+  for (int f = 0; f < frames; ++f) {
+    sim.RenderPixels(f, pixels, &counts);
+    std::copy(counts.begin(), counts.end(), out->begin() + static_cast<std::ptrdiff_t>(f * n));
+  }
+}
+
+// The same for image pixels `image` (sorted; their list `pixels`), taking the counts of those
+// already rendered in `known_frames` (of the sorted image pixels `known`) rather than rendering
+// them again: a pixel's draw depends on the pixel and the frame alone.
+void RenderFramesReusing(const StereoSim& sim, const std::vector<std::uint32_t>& image,
+                         const PixelList& pixels, const std::vector<std::uint32_t>& known,
+                         const std::vector<std::uint16_t>& known_frames, int frames,
+                         std::vector<std::uint16_t>* out) {
+  const std::size_t n = image.size(), n_known = known.size();
+  std::vector<std::ptrdiff_t> from(n, -1);
+  PixelList missing;
+  std::vector<std::size_t> missing_at;
+  for (std::size_t k = 0, j = 0; k < n; ++k) {
+    while (j < n_known && known[j] < image[k]) ++j;
+    if (j < n_known && known[j] == image[k]) {
+      from[k] = static_cast<std::ptrdiff_t>(j);
+    } else {
+      missing.window.push_back(pixels.window[k]);
+      missing.image.push_back(pixels.image[k]);
+      missing_at.push_back(k);
+    }
+  }
+  out->assign(static_cast<std::size_t>(frames) * n, 0);
+  std::vector<std::uint16_t> counts;
+  for (int f = 0; f < frames; ++f) {
+    std::uint16_t* row = out->data() + static_cast<std::size_t>(f) * n;
+    const std::uint16_t* known_row = known_frames.data() + static_cast<std::size_t>(f) * n_known;
+    for (std::size_t k = 0; k < n; ++k)
+      if (from[k] >= 0) row[k] = known_row[from[k]];
+    if (missing.empty()) continue;
+    sim.RenderPixels(f, missing, &counts);
+    for (std::size_t q = 0; q < missing_at.size(); ++q) row[missing_at[q]] = counts[q];
+  }
+}
+
+// Each pixel's valid samples and summed counts over the frames (n pixels a frame).
+std::vector<metrics::PooledPixel> Pool(const std::vector<std::uint16_t>& frames_counts,
+                                       std::size_t n) {
+  // 32-bit sums (vectorized), carried into 64-bit ones every 65535 frames of 16-bit counts.
+  std::vector<std::uint32_t> n_valid(n, 0), sum(n, 0);
+  std::vector<std::uint64_t> carry(n, 0);
+  const std::size_t frames = n == 0 ? 0 : frames_counts.size() / n;
+  for (std::size_t f = 0; f < frames; ++f) {
+    if (f > 0 && f % 65535 == 0)
+      for (std::size_t k = 0; k < n; ++k) {
+        carry[k] += sum[k];
+        sum[k] = 0;
+      }
+    const std::uint16_t* frame = frames_counts.data() + f * n;
+    for (std::size_t k = 0; k < n; ++k) {
+      n_valid[k] += frame[k] != 0;
+      sum[k] += frame[k];
+    }
+  }
+  std::vector<metrics::PooledPixel> pooled(n);
+  for (std::size_t k = 0; k < n; ++k) pooled[k] = {n_valid[k], carry[k] + sum[k]};
+  return pooled;
 }
 
 }  // namespace
@@ -82,7 +213,8 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   m.distance_m = cell.distance_m;
   m.angle_deg = cell.angle_deg;
 
-  // The window holds every pixel whose static maps the region's pixels depend on.
+  // The window holds every pixel whose static maps the region's pixels depend on, and the
+  // pixels the panel's window takes in when the range is under-read (kUnderReadCover).
   const int pad =
       std::max(s.edge_band_px, static_cast<int>(params.departures.edge_mix_width_px)) + 3;
   const Window window = PanelWindow(params, cell, pad);
@@ -93,50 +225,74 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   }
   const StereoSim sim(params, cell, window);
   result.truth = sim.truth();
+  const int pooled_frames =
+      mp.region.pooled_frames > 0 ? std::min(mp.region.pooled_frames, frames) : frames;
+  const Eigen::Matrix3d level = LevelFromCamera(params.protocol.scene);
+  metrics::Plane ground;
+  ground.normal = level.transpose() * Eigen::Vector3d(0, -1, 0);
+  ground.offset_m = params.protocol.scene.camera_height_m;
+
+  // The panel's plane as the first frames measure it, on the panel's true footprint less a band
+  // of its edges' width (the sensor's edge band, the matching window's mixing): panel_extract's
+  // plane is a robust one (RANSAC, refitted on pixels within the sensor's noise of it), which
+  // pixels mixed with the background behind the panel's outline do not pull.
+  const metrics::PanelRectangle true_rect = PanelRectangleOf(result.truth.panel);
+  metrics::PanelRegion footprint =
+      metrics::RegionFromRectangle(in, true_rect, mp.region_margin_px);
+  const PixelList footprint_px = sim.PixelsOfImage(&footprint.pixels);
+  if (footprint_px.empty()) {
+    m.region_px = 0;
+    m.status = "no_panel";
+    m.message = "the panel's image region is empty";
+    return result;
+  }
+  std::vector<std::uint16_t> footprint_frames;
+  RenderFrames(sim, footprint_px, pooled_frames, &footprint_frames);
+  const std::vector<metrics::PooledPixel> footprint_pooled =
+      Pool(footprint_frames, footprint_px.size());
+  const int edge_px =
+      std::max(s.edge_band_px, static_cast<int>(std::ceil(params.departures.edge_mix_width_px)));
+  metrics::PanelRegion interior =
+      metrics::RegionFromRectangle(in, true_rect, mp.region_margin_px + edge_px);
+  std::vector<metrics::PooledPixel> interior_pooled;
+  {
+    std::vector<std::uint32_t> kept;  // the interior's pixels, all within the footprint
+    for (std::size_t k = 0, j = 0; k < interior.pixels.size(); ++k) {
+      while (j < footprint.pixels.size() && footprint.pixels[j] < interior.pixels[k]) ++j;
+      if (j == footprint.pixels.size() || footprint.pixels[j] != interior.pixels[k]) continue;
+      kept.push_back(interior.pixels[k]);
+      interior_pooled.push_back(footprint_pooled[j]);
+    }
+    interior.pixels.swap(kept);
+  }
+  constexpr std::size_t kMinInteriorPx = 25;  // fewer: the whole footprint measures the plane
+  const bool use_interior = interior.pixels.size() >= kMinInteriorPx;
+  metrics::Plane measured_plane;
+  const bool plane_ok = FitPooledPlane(
+      in, use_interior ? interior.pixels : footprint.pixels,
+      use_interior ? interior_pooled : footprint_pooled, s.depth_units_m, &measured_plane);
+
+  // The region: the panel's known size laid on that plane around the panel's seen centre, as
+  // panel_extract lays its window (panel/panel_fit.h); its pooled frames decide its pixels.
+  metrics::PanelRectangle rect = true_rect;
+  if (plane_ok) WindowOnPlane(measured_plane, true_rect, &rect);
+  result.window = rect;
   metrics::PanelRegion region;
-  PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region);
+  PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region, &rect);
   if (pixels.empty()) {
     m.region_px = 0;
     m.status = "no_panel";
     m.message = "the panel's image region is empty";
     return result;
   }
-
-  // The first pooled frames decide the panel's pixels, as panel_extract's pooled frames do; they
-  // are kept and measured, the rest rendered on the decided pixels alone.
-  const std::size_t n_px = pixels.size();
-  const int pooled_frames =
-      mp.region.pooled_frames > 0 ? std::min(mp.region.pooled_frames, frames) : frames;
-  const bool decide = !(params.departures.region_spill_px > 0);
-  std::vector<std::uint16_t> stored(decide ? static_cast<std::size_t>(pooled_frames) * n_px : 0);
-  std::vector<std::uint16_t> counts;
-  int rendered = 0;
-  if (decide) {
-    // 32-bit sums (vectorized), carried into 64-bit ones every 65535 frames of 16-bit counts.
-    std::vector<std::uint32_t> n_valid(n_px, 0), sum(n_px, 0);
-    std::vector<std::uint64_t> carry(n_px, 0);
-    for (; rendered < pooled_frames; ++rendered) {
-      if (rendered > 0 && rendered % 65535 == 0)
-        for (std::size_t k = 0; k < n_px; ++k) {
-          carry[k] += sum[k];
-          sum[k] = 0;
-        }
-      std::uint16_t* frame = stored.data() + static_cast<std::size_t>(rendered) * n_px;
-      sim.RenderPixels(rendered, pixels, &counts);
-      std::copy(counts.begin(), counts.end(), frame);
-      for (std::size_t k = 0; k < n_px; ++k) {
-        n_valid[k] += frame[k] != 0;
-        sum[k] += frame[k];
-      }
-    }
-    std::vector<metrics::PooledPixel> pooled(n_px);
-    for (std::size_t k = 0; k < n_px; ++k) pooled[k] = {n_valid[k], carry[k] + sum[k]};
-    const Eigen::Matrix3d level = LevelFromCamera(params.protocol.scene);
-    metrics::Plane ground;
-    ground.normal = level.transpose() * Eigen::Vector3d(0, -1, 0);
-    ground.offset_m = params.protocol.scene.camera_height_m;
-    metrics::PanelPixels decided =
-        metrics::DecidePanelPixels(in, region, pooled, s.depth_units_m, &ground, mp.region);
+  std::vector<std::uint16_t> stored;
+  RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
+                      pooled_frames, &stored);
+  const int rendered = pooled_frames;
+  if (!(params.departures.region_spill_px > 0)) {  // a drawn region is not decided
+    const std::size_t n_px = pixels.size();
+    metrics::PanelPixels decided = metrics::DecidePanelPixels(
+        in, region, Pool(stored, n_px), s.depth_units_m, &ground, mp.region);
     if (decided.excluded() > 0) {
       // Keep the decided pixels' positions in the region, the stored frames and the pixel list.
       std::vector<std::size_t> keep;
@@ -176,6 +332,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   kp.baseline_m = s.baseline_m;
   kp.region_margin_px = mp.region_margin_px;
   metrics::RegionMetrics kernel(in, region, kp);
+  std::vector<std::uint16_t> counts;
   for (int k = 0; k < rendered; ++k)
     kernel.AddRegionCounts(stored.data() + static_cast<std::size_t>(k) * pixels.size(),
                            s.depth_units_m);

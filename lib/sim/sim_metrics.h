@@ -13,8 +13,9 @@
 namespace depthbias::sim {
 
 // Options of the metrics-only path.
-// The region measured is decided as panel_extract decides it: the panel's rectangle shrunk by
-// region_margin_px, less the pixels that the first `region.pooled_frames` frames show to be
+// The region measured is decided as panel_extract decides it: the panel's known size laid on the
+// plane the first frames measure (where panel_extract's window lies: its extent in the image
+// follows the range error), shrunk by region_margin_px, less the pixels that the first `region.pooled_frames` frames show to be
 // something else than the panel (metrics::DecidePanelPixels, with panel_extract's default
 // parameters). Under the region_spill effect the region is drawn, not decided (by hand, or a
 // detector's box with a margin): its pixels are all measured.
@@ -33,6 +34,9 @@ struct CellMetricsResult {
   records::PanelMetrics metrics;
   CellTruth truth;
   int region_px = 0;
+  // The panel's known size laid on the plane the first frames measure, around the panel seen
+  // (as panel_extract's window): the rectangle the region is drawn from.
+  metrics::PanelRectangle window;
 };
 CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
                                   const MetricsParams& metrics = {});

@@ -157,10 +157,20 @@ bool Identical(const CastKey& a, const CastKey& b) {  // the cheap fields first
          Identical(a.intrinsics, b.intrinsics) && Identical(a.scene, b.scene);
 }
 
-// Everything RegionPixels reads: the panel as placed, the camera, the window, the margin and
-// the region spill.
+bool Same(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return Same(a.x(), b.x()) && Same(a.y(), b.y()) && Same(a.z(), b.z());
+}
+bool Identical(const metrics::PanelRectangle& a, const metrics::PanelRectangle& b) {
+  return Same(a.center_m, b.center_m) && Same(a.width_m, b.width_m) &&
+         Same(a.height_m, b.height_m) && Same(a.plane.offset_m, b.plane.offset_m) &&
+         Same(a.plane.normal, b.plane.normal) && Same(a.axis_width, b.axis_width) &&
+         Same(a.axis_up, b.axis_up);
+}
+
+// Everything RegionPixels reads: the rectangle the region is drawn on, the camera, the window,
+// the margin and the region spill.
 struct RegionKey {
-  PanelPose panel;
+  metrics::PanelRectangle rect;
   camera::Intrinsics intrinsics;
   Window window;
   double margin_px = 0;
@@ -168,7 +178,7 @@ struct RegionKey {
 };
 bool Identical(const RegionKey& a, const RegionKey& b) {
   return Identical(a.window, b.window) && Same(a.margin_px, b.margin_px) &&
-         Same(a.spill_px, b.spill_px) && Identical(a.panel, b.panel) &&
+         Same(a.spill_px, b.spill_px) && Identical(a.rect, b.rect) &&
          Identical(a.intrinsics, b.intrinsics);
 }
 struct RegionData {
@@ -673,15 +683,16 @@ metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose) {
   return rect;
 }
 
-PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out) const {
-  // The same panel, camera and window give the same region: drawn once, shared.
+PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out,
+                                  const metrics::PanelRectangle* drawn) const {
+  // The same rectangle, camera and window give the same region: drawn once, shared.
   static SharedCache<RegionKey, RegionData> cache(kRegionCacheBytes);
-  const RegionKey key{truth_.panel, params_.sensor.intrinsics, window_, margin_px,
-                      params_.departures.region_spill_px};
+  const RegionKey key{drawn ? *drawn : PanelRectangleOf(truth_.panel), params_.sensor.intrinsics,
+                      window_, margin_px, params_.departures.region_spill_px};
   std::shared_ptr<const RegionData> found = cache.Find(key);
   if (!found) {
     auto made = std::make_shared<RegionData>();
-    metrics::PanelRectangle rect = PanelRectangleOf(truth_.panel);
+    metrics::PanelRectangle rect = key.rect;
     if (params_.departures.region_spill_px > 0) {  // region_spill: the region drawn larger
       const Eigen::Vector2d foot = metrics::PixelFootprint(params_.sensor.intrinsics, rect);
       rect.width_m += 2 * params_.departures.region_spill_px * foot.x();
@@ -689,17 +700,7 @@ PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region
     }
     metrics::PanelRegion region =
         metrics::RegionFromRectangle(params_.sensor.intrinsics, rect, margin_px);
-    const int width = params_.sensor.intrinsics.width;
-    std::vector<std::uint32_t> kept;
-    kept.reserve(region.pixels.size());
-    for (std::uint32_t i : region.pixels) {
-      const int u = static_cast<int>(i % width) - window_.u0;
-      const int v = static_cast<int>(i / width) - window_.v0;
-      if (u < 0 || v < 0 || u >= window_.width || v >= window_.height) continue;
-      made->window.push_back(v * window_.width + u);
-      kept.push_back(i);
-    }
-    region.pixels.swap(kept);
+    made->window = PixelsOfImage(&region.pixels).window;
     made->region = std::move(region);
     const std::size_t bytes = sizeof(RegionData) + made->window.size() * (sizeof(int) + 4) +
                               made->region.outline_px.size() * sizeof(Eigen::Vector2d);
@@ -711,6 +712,22 @@ PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region
   pixels.window = found->window;
   // A region pixel's index in the image is its draw's index in frame 0 (Counter).
   pixels.image.assign(found->region.pixels.begin(), found->region.pixels.end());
+  return pixels;
+}
+
+PixelList StereoSim::PixelsOfImage(std::vector<std::uint32_t>* image_pixels) const {
+  const int width = params_.sensor.intrinsics.width;
+  PixelList pixels;
+  std::size_t kept = 0;
+  for (std::uint32_t i : *image_pixels) {
+    const int u = static_cast<int>(i % width) - window_.u0;
+    const int v = static_cast<int>(i / width) - window_.v0;
+    if (u < 0 || v < 0 || u >= window_.width || v >= window_.height) continue;
+    pixels.window.push_back(v * window_.width + u);
+    pixels.image.push_back(i);  // a pixel's index in the image is its draw's index in frame 0
+    (*image_pixels)[kept++] = i;
+  }
+  image_pixels->resize(kept);
   return pixels;
 }
 

@@ -78,9 +78,13 @@ class StereoSim {
   // Window pixels that see the panel, and that still do after eroding it by margin_px.
   PixelList PanelPixels(int margin_px) const;
   // The panel's image region, drawn by the one definition panel_extract uses
-  // (metrics::RegionFromRectangle on the true panel rectangle), limited to the window; the
-  // region itself in *region when given.
-  PixelList RegionPixels(double margin_px, metrics::PanelRegion* region = nullptr) const;
+  // (metrics::RegionFromRectangle) on rect (null: the true panel's rectangle), grown by the
+  // region_spill effect, limited to the window; the region itself in *region when given.
+  PixelList RegionPixels(double margin_px, metrics::PanelRegion* region = nullptr,
+                         const metrics::PanelRectangle* rect = nullptr) const;
+  // The given image pixels (v·width + u, sorted) that lie in the window; those outside it are
+  // removed from *image_pixels.
+  PixelList PixelsOfImage(std::vector<std::uint32_t>* image_pixels) const;
   // True depth Z of a window pixel (0 where nothing is hit).
   double TrueDepth(int pixel) const { return true_depth_m_[pixel]; }
 

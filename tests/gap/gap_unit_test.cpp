@@ -514,7 +514,8 @@ TEST(RegionSpill, SignatureInTheMetrics) {
                                    &q.departures, &why));
   const auto windowed = sim::SimulateMetrics(q, c, mp);
   const sim::StereoSim full(q, c);
-  EXPECT_EQ(static_cast<size_t>(windowed.region_px), full.RegionPixels(0.5).size());
+  EXPECT_EQ(static_cast<size_t>(windowed.region_px),
+            full.RegionPixels(0.5, nullptr, &windowed.window).size());
   // A fractional width is floored to whole pixels.
   EXPECT_EQ(with(4.7, 1.8).region_px, spill.region_px);
 }

@@ -96,7 +96,11 @@ TEST(StereoSim, MetricsOnlyEqualsMetricsOfRenderedFrames) {
   const SimParams p = Base(0.1, 0.3, 6);
   const Cell c = MakeCell(16, 35);
   const StereoSim sim(p, c);
-  const PixelList region = sim.RegionPixels(3);
+  // The region the metrics-only path draws: the panel's size on the plane it measured.
+  MetricsParams mp;
+  mp.region_margin_px = 3;
+  const CellMetricsResult measured = SimulateMetrics(p, c, mp);
+  const PixelList region = sim.RegionPixels(3, nullptr, &measured.window);
   std::vector<double> z;
   size_t total = 0;
   records::DepthFrame frame;
