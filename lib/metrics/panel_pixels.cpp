@@ -138,8 +138,14 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
     if (zp - mean_m[k] > limit) return PixelClass::kInFront;
     return PixelClass::kOnPlane;
   };
-  // First plane: every observed pixel; then the pixels on it, until they no longer change.
-  out.plane_ok = FitInverseDepthPlane(rays, n_per_z, weight, use, &out.plane);
+  // First plane: every observed pixel, each counted once (a textured background seen past the
+  // panel's edge gives many samples a pixel where a hole-ridden panel gives few: weighted by its
+  // samples, a strip of it would pull the first plane off the panel); then the pixels on it,
+  // each weighted by its samples, until they no longer change.
+  std::vector<double> ones(n, 1.0), inv_mean(n, 0.0);
+  for (std::size_t k = 0; k < n; ++k)
+    if (use[k]) inv_mean[k] = 1.0 / mean_m[k];
+  out.plane_ok = FitInverseDepthPlane(rays, inv_mean, ones, use, &out.plane);
   const std::vector<std::uint8_t>& observed = use;
   std::vector<std::uint8_t> on(n, 0), last;
   std::vector<double> scratch;

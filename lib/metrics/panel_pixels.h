@@ -7,8 +7,11 @@
 // recording (count n and mean depth Z̄) against the panel's plane and the ground: on the plane,
 // behind it (the background seen past the panel's edge), in front of it (an occluder), on the
 // ground, or a hole (no sample). The panel's plane is fitted to the region's own pooled pixels in
-// inverse depth (1/Z = k·(x/z, y/z, 1), each pixel weighted by its samples), then refitted on the
-// pixels found on it until they no longer change (at most refit_iterations times). A pixel
+// inverse depth (1/Z = k·(x/z, y/z, 1)), first each observed pixel counted once (a textured
+// background seen past the panel's edge has many samples a pixel where a hole-ridden panel has
+// few), then refitted on the pixels found on it, each weighted by its samples, until they no
+// longer change (at most refit_iterations times). The first plane is a least-squares one: a
+// background strip with more observed pixels than the panel still turns it. A pixel
 // departs from the plane when its mean depth differs from the plane's depth on its ray by more
 // than sigma_k·σ_Z(Z)/√n + plane_distance_m, σ_Z = Z²·σ_d/(f·B); σ_d is the larger of
 // expected_subpixel_rms_px and the region's own scatter (1.4826 × the median absolute disparity

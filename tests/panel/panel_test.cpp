@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include "metrics/panel_pixels.h"
 #include "panel/extract.h"
 #include "synthetic_scene.h"
 
@@ -217,6 +218,48 @@ TEST(PanelExtractBox, BoxInsideThePanelAgreesWithAutomatic) {
   EXPECT_NEAR(rb.metrics.azimuth_deg, ra.metrics.azimuth_deg, 0.5);
   EXPECT_NEAR(rb.metrics.normal_tilt_deg, ra.metrics.normal_tilt_deg, 1.0);
   EXPECT_EQ(rb.metrics.region_px, (reg.u_max - reg.u_min - 5.0) * (reg.v_max - reg.v_min - 5.0));
+}
+
+// A far panel seen through holes (one valid sample a pixel in the pooled frames, as sunset High
+// Accuracy at 12 m) beside a strip of textured background taken in by the window (a sample every
+// frame): the first plane counts each observed pixel once, so the strip's many samples do not
+// turn it off the panel; the strip is left out and the panel kept.
+TEST(DecidePanelPixels, ADenseBackgroundStripDoesNotPullASparsePanelsPlane) {
+  const camera::Intrinsics in;  // 1280 × 720, f = 640 px
+  metrics::PanelRegion region;
+  region.width = in.width;
+  region.height = in.height;
+  std::vector<metrics::PooledPixel> pooled;
+  const double units = 0.001, panel_z = 12.0, background_z = 20.0;
+  int strip = 0, panel = 0;
+  for (int v = 340; v < 380; ++v)
+    for (int u = 600; u < 660; ++u) {
+      region.pixels.push_back(static_cast<std::uint32_t>(v * in.width + u));
+      const bool background = u >= 656;  // 4 of 60 columns
+      metrics::PooledPixel p;
+      if (background) {
+        p.count = 30;
+        p.sum_counts = 30 * static_cast<std::uint64_t>(background_z / units);
+        ++strip;
+      } else if ((u + 3 * v) % 4 == 0) {  // a quarter of the panel's pixels seen, once each
+        p.count = 1;
+        p.sum_counts = static_cast<std::uint64_t>(panel_z / units) + (u % 3) * 10;
+        ++panel;
+      }
+      pooled.push_back(p);
+    }
+  region.u_min = 600, region.u_max = 659, region.v_min = 340, region.v_max = 379;
+  metrics::PanelPixelParams params;
+  const metrics::PanelPixels decided =
+      metrics::DecidePanelPixels(in, region, pooled, units, nullptr, params);
+  ASSERT_TRUE(decided.plane_ok);
+  ASSERT_GT(strip * 30, 3 * panel);  // the strip holds most of the samples
+  const double tilt_deg =
+      std::acos(std::fabs(decided.plane.normal.normalized().z())) * 180.0 / M_PI;
+  EXPECT_LT(tilt_deg, 2.0);
+  EXPECT_NEAR(decided.plane.DepthOnRay(Eigen::Vector3d(-0.03, 0.0, 1.0)), panel_z, 0.1);
+  EXPECT_EQ(decided.behind, strip);
+  EXPECT_EQ(decided.on_plane, panel);
 }
 
 }  // namespace
