@@ -26,12 +26,26 @@ RayTable::RayTable(const camera::Intrinsics& intrinsics) : intrinsics_(intrinsic
 PixelNormalizer::PixelNormalizer(const camera::Intrinsics& intrinsics)
     : intrinsics_(intrinsics), distorted_(!camera::IsDistortionZero(intrinsics)) {
   if (distorted_) return;
-  x_.resize(static_cast<std::size_t>(std::max(intrinsics.width, 0)));
-  y_.resize(static_cast<std::size_t>(std::max(intrinsics.height, 0)));
-  for (int u = 0; u < intrinsics.width; ++u)
-    x_[static_cast<std::size_t>(u)] = camera::PixelToNormalized(intrinsics, {u, 0}).x();
-  for (int v = 0; v < intrinsics.height; ++v)
-    y_[static_cast<std::size_t>(v)] = camera::PixelToNormalized(intrinsics, {0, v}).y();
+  thread_local camera::Intrinsics last;
+  thread_local std::shared_ptr<const Tables> last_tables;
+  auto same = [](const camera::Intrinsics& a, const camera::Intrinsics& b) {
+    return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
+           a.ppx == b.ppx && a.ppy == b.ppy && a.model == b.model && a.coeffs == b.coeffs;
+  };
+  if (!last_tables || !same(last, intrinsics)) {
+    auto t = std::make_shared<Tables>();
+    t->x.resize(static_cast<std::size_t>(std::max(intrinsics.width, 0)));
+    t->y.resize(static_cast<std::size_t>(std::max(intrinsics.height, 0)));
+    for (int u = 0; u < intrinsics.width; ++u)
+      t->x[static_cast<std::size_t>(u)] = camera::PixelToNormalized(intrinsics, {u, 0}).x();
+    for (int v = 0; v < intrinsics.height; ++v)
+      t->y[static_cast<std::size_t>(v)] = camera::PixelToNormalized(intrinsics, {0, v}).y();
+    last = intrinsics;
+    last_tables = std::move(t);
+  }
+  tables_ = last_tables;
+  x_ = tables_->x.data();
+  y_ = tables_->y.data();
 }
 
 void PlaneMoments::Add(const Eigen::Vector3d& p, double w) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -53,9 +54,16 @@ class PixelNormalizer {
   }
 
  private:
+  struct Tables {
+    std::vector<double> x, y;  // per column, per row
+  };
   camera::Intrinsics intrinsics_;
   bool distorted_ = false;
-  std::vector<double> x_, y_;  // per column, per row
+  // The last camera's tables of this thread, shared (the metrics build one normalizer per
+  // region, thousands a run, of one camera).
+  std::shared_ptr<const Tables> tables_;
+  const double* x_ = nullptr;
+  const double* y_ = nullptr;
 };
 
 // Plane n·p + d = 0 with |n| = 1, n oriented toward the camera (d > 0 for a plane in front).

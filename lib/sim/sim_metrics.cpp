@@ -237,9 +237,8 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   // plane is a robust one (RANSAC, refitted on pixels within the sensor's noise of it), which
   // pixels mixed with the background behind the panel's outline do not pull.
   const metrics::PanelRectangle true_rect = PanelRectangleOf(result.truth.panel);
-  metrics::PanelRegion footprint =
-      metrics::RegionFromRectangle(in, true_rect, mp.region_margin_px);
-  const PixelList footprint_px = sim.PixelsOfImage(&footprint.pixels);
+  metrics::PanelRegion footprint;
+  const PixelList footprint_px = sim.RectanglePixels(true_rect, mp.region_margin_px, &footprint);
   if (footprint_px.empty()) {
     m.region_px = 0;
     m.status = "no_panel";
@@ -252,8 +251,8 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
       Pool(footprint_frames, footprint_px.size());
   const int edge_px =
       std::max(s.edge_band_px, static_cast<int>(std::ceil(params.departures.edge_mix_width_px)));
-  metrics::PanelRegion interior =
-      metrics::RegionFromRectangle(in, true_rect, mp.region_margin_px + edge_px);
+  metrics::PanelRegion interior;
+  sim.RectanglePixels(true_rect, mp.region_margin_px + edge_px, &interior);
   std::vector<metrics::PooledPixel> interior_pooled;
   {
     std::vector<std::uint32_t> kept;  // the interior's pixels, all within the footprint

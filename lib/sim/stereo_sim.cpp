@@ -685,21 +685,31 @@ metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose) {
 
 PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out,
                                   const metrics::PanelRectangle* drawn) const {
+  return CachedRegionPixels(drawn ? *drawn : PanelRectangleOf(truth_.panel), margin_px,
+                            params_.departures.region_spill_px, region_out);
+}
+
+PixelList StereoSim::RectanglePixels(const metrics::PanelRectangle& rect, double margin_px,
+                                     metrics::PanelRegion* region_out) const {
+  return CachedRegionPixels(rect, margin_px, 0.0, region_out);
+}
+
+PixelList StereoSim::CachedRegionPixels(const metrics::PanelRectangle& rect, double margin_px,
+                                        double spill_px, metrics::PanelRegion* region_out) const {
   // The same rectangle, camera and window give the same region: drawn once, shared.
   static SharedCache<RegionKey, RegionData> cache(kRegionCacheBytes);
-  const RegionKey key{drawn ? *drawn : PanelRectangleOf(truth_.panel), params_.sensor.intrinsics,
-                      window_, margin_px, params_.departures.region_spill_px};
+  const RegionKey key{rect, params_.sensor.intrinsics, window_, margin_px, spill_px};
   std::shared_ptr<const RegionData> found = cache.Find(key);
   if (!found) {
     auto made = std::make_shared<RegionData>();
-    metrics::PanelRectangle rect = key.rect;
-    if (params_.departures.region_spill_px > 0) {  // region_spill: the region drawn larger
-      const Eigen::Vector2d foot = metrics::PixelFootprint(params_.sensor.intrinsics, rect);
-      rect.width_m += 2 * params_.departures.region_spill_px * foot.x();
-      rect.height_m += 2 * params_.departures.region_spill_px * foot.y();
+    metrics::PanelRectangle grown = rect;
+    if (spill_px > 0) {  // region_spill: the region drawn larger
+      const Eigen::Vector2d foot = metrics::PixelFootprint(params_.sensor.intrinsics, grown);
+      grown.width_m += 2 * spill_px * foot.x();
+      grown.height_m += 2 * spill_px * foot.y();
     }
     metrics::PanelRegion region =
-        metrics::RegionFromRectangle(params_.sensor.intrinsics, rect, margin_px);
+        metrics::RegionFromRectangle(params_.sensor.intrinsics, grown, margin_px);
     made->window = PixelsOfImage(&region.pixels).window;
     made->region = std::move(region);
     const std::size_t bytes = sizeof(RegionData) + made->window.size() * (sizeof(int) + 4) +

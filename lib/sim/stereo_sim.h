@@ -82,6 +82,11 @@ class StereoSim {
   // region_spill effect, limited to the window; the region itself in *region when given.
   PixelList RegionPixels(double margin_px, metrics::PanelRegion* region = nullptr,
                          const metrics::PanelRectangle* rect = nullptr) const;
+  // The region of rect (metrics::RegionFromRectangle, not grown by region_spill), limited to the
+  // window; the region itself in *region when given. Shared between simulations like
+  // RegionPixels'.
+  PixelList RectanglePixels(const metrics::PanelRectangle& rect, double margin_px,
+                            metrics::PanelRegion* region = nullptr) const;
   // The given image pixels (v·width + u, sorted) that lie in the window; those outside it are
   // removed from *image_pixels.
   PixelList PixelsOfImage(std::vector<std::uint32_t>* image_pixels) const;
@@ -90,6 +95,8 @@ class StereoSim {
 
  private:
   void Build();
+  PixelList CachedRegionPixels(const metrics::PanelRectangle& rect, double margin_px,
+                               double spill_px, metrics::PanelRegion* region) const;
   std::uint64_t Counter(int frame_index, int pixel) const;  // the draw's index
   std::uint64_t PairHash(std::uint64_t counter) const;
 
