@@ -96,6 +96,24 @@ PixelClass ClassifyMeanDepth(const Eigen::Vector3d& ray, std::uint32_t n, double
   return PixelClass::kOnPlane;
 }
 
+bool FitPooledPlane(const camera::Intrinsics& in, const std::vector<std::uint32_t>& pixels,
+                    const std::vector<PooledPixel>& pooled, double units, Plane* plane) {
+  const std::size_t n = std::min(pixels.size(), pooled.size());
+  std::vector<Eigen::Vector3d> rays(n);
+  std::vector<double> weight(n, 0.0), n_per_z(n, 0.0);
+  std::vector<std::uint8_t> use(n, 0);
+  const PixelNormalizer normalized(in);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (pooled[k].count == 0 || pooled[k].sum_counts == 0) continue;
+    const Eigen::Vector2d r = normalized.OfIndex(pixels[k]);
+    rays[k] = {r.x(), r.y(), 1.0};
+    weight[k] = pooled[k].count;
+    n_per_z[k] = weight[k] / (static_cast<double>(pooled[k].sum_counts) / pooled[k].count * units);
+    use[k] = 1;
+  }
+  return FitInverseDepthPlane(rays, n_per_z, weight, use, plane);
+}
+
 PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& region,
                               const std::vector<PooledPixel>& pooled, double units,
                               const Plane* ground, const PanelPixelParams& p) {

@@ -76,6 +76,12 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& intrinsics, const PanelR
                               const std::vector<PooledPixel>& pooled, double depth_units_m,
                               const Plane* ground, const PanelPixelParams& params);
 
+// The plane 1/Z = k·(x/z, y/z, 1) of the given image pixels' pooled mean depths (pooled[k] of
+// pixels[k]), each weighted by its samples (least squares for noise along the rays, as
+// DecidePanelPixels refits it); false for fewer than 3 observed pixels or a degenerate system.
+bool FitPooledPlane(const camera::Intrinsics& intrinsics, const std::vector<std::uint32_t>& pixels,
+                    const std::vector<PooledPixel>& pooled, double depth_units_m, Plane* plane);
+
 // The region reduced to the given sorted pixels (outline and bounding box kept).
 PanelRegion WithPixels(const PanelRegion& region, std::vector<std::uint32_t> pixels);
 

@@ -6,8 +6,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Cholesky>
-
 #include "metrics/region_metrics.h"
 #include "common/parallel.h"
 #include "sim/sim_metrics.h"
@@ -68,38 +66,6 @@ void WindowOnPlane(const metrics::Plane& plane, const metrics::PanelRectangle& t
   r.center_m = scale * true_rect.center_m;
   r.plane.offset_m = scale * true_rect.plane.offset_m;
   *rect = r;
-}
-
-// The plane 1/Z = k·(x/z, y/z, 1) of the pixels' pooled mean depths, each weighted by its
-// samples (least squares for noise along the rays, as metrics::DecidePanelPixels fits it); false
-// for fewer than 3 observed pixels or a degenerate system.
-bool FitPooledPlane(const camera::Intrinsics& in, const std::vector<std::uint32_t>& pixels,
-                    const std::vector<metrics::PooledPixel>& pooled, double depth_units_m,
-                    metrics::Plane* plane) {
-  const metrics::PixelNormalizer normalized(in);
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-  int used = 0;
-  for (std::size_t k = 0; k < pixels.size(); ++k) {
-    if (pooled[k].count == 0 || pooled[k].sum_counts == 0) continue;
-    const Eigen::Vector2d r = normalized.OfIndex(pixels[k]);
-    const Eigen::Vector3d a(r.x(), r.y(), 1.0);
-    const double n = pooled[k].count;
-    const double mean_m = static_cast<double>(pooled[k].sum_counts) / n * depth_units_m;
-    ata += n * a * a.transpose();
-    atb += (n / mean_m) * a;
-    ++used;
-  }
-  if (used < 3) return false;
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
-  const Eigen::Vector3d k = ldlt.solve(atb);
-  const double len = k.norm();
-  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12) || !std::isfinite(len) ||
-      !(len > 0))
-    return false;
-  plane->normal = -k / len;
-  plane->offset_m = 1.0 / len;
-  return true;
 }
 
 // Depth counts of `frames` frames of pixels, frame after frame.
@@ -239,12 +205,13 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   const metrics::PanelRectangle true_rect = PanelRectangleOf(result.truth.panel);
   metrics::PanelRegion footprint;
   const PixelList footprint_px = sim.RectanglePixels(true_rect, mp.region_margin_px, &footprint);
-  if (footprint_px.empty()) {
+  auto no_panel = [&]() {
     m.region_px = 0;
     m.status = "no_panel";
     m.message = "the panel's image region is empty";
     return result;
-  }
+  };
+  if (footprint_px.empty()) return no_panel();
   std::vector<std::uint16_t> footprint_frames;
   RenderFrames(sim, footprint_px, pooled_frames, &footprint_frames);
   const std::vector<metrics::PooledPixel> footprint_pooled =
@@ -267,7 +234,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   constexpr std::size_t kMinInteriorPx = 25;  // fewer: the whole footprint measures the plane
   const bool use_interior = interior.pixels.size() >= kMinInteriorPx;
   metrics::Plane measured_plane;
-  const bool plane_ok = FitPooledPlane(
+  const bool plane_ok = metrics::FitPooledPlane(
       in, use_interior ? interior.pixels : footprint.pixels,
       use_interior ? interior_pooled : footprint_pooled, s.depth_units_m, &measured_plane);
 
@@ -278,12 +245,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   result.window = rect;
   metrics::PanelRegion region;
   PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region, &rect);
-  if (pixels.empty()) {
-    m.region_px = 0;
-    m.status = "no_panel";
-    m.message = "the panel's image region is empty";
-    return result;
-  }
+  if (pixels.empty()) return no_panel();
   std::vector<std::uint16_t> stored;
   RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
                       pooled_frames, &stored);
