@@ -249,7 +249,6 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   std::vector<std::uint16_t> stored;
   RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
                       pooled_frames, &stored);
-  const int rendered = pooled_frames;
   if (!(params.departures.region_spill_px > 0)) {  // a drawn region is not decided
     const std::size_t n_px = pixels.size();
     metrics::PanelPixels decided = metrics::DecidePanelPixels(
@@ -294,10 +293,10 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   kp.region_margin_px = mp.region_margin_px;
   metrics::RegionMetrics kernel(in, region, kp);
   std::vector<std::uint16_t> counts;
-  for (int k = 0; k < rendered; ++k)
+  for (int k = 0; k < pooled_frames; ++k)
     kernel.AddRegionCounts(stored.data() + static_cast<std::size_t>(k) * pixels.size(),
                            s.depth_units_m);
-  for (int k = rendered; k < frames; ++k) {
+  for (int k = pooled_frames; k < frames; ++k) {
     sim.RenderPixels(k, pixels, &counts);
     kernel.AddRegionCounts(counts.data(), s.depth_units_m);
   }

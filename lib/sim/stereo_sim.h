@@ -87,9 +87,6 @@ class StereoSim {
   // RegionPixels'.
   PixelList RectanglePixels(const metrics::PanelRectangle& rect, double margin_px,
                             metrics::PanelRegion* region = nullptr) const;
-  // The given image pixels (v·width + u, sorted) that lie in the window; those outside it are
-  // removed from *image_pixels.
-  PixelList PixelsOfImage(std::vector<std::uint32_t>* image_pixels) const;
   // True depth Z of a window pixel (0 where nothing is hit).
   double TrueDepth(int pixel) const { return true_depth_m_[pixel]; }
 
@@ -97,6 +94,9 @@ class StereoSim {
   void Build();
   PixelList CachedRegionPixels(const metrics::PanelRectangle& rect, double margin_px,
                                double spill_px, metrics::PanelRegion* region) const;
+  // The given image pixels (v·width + u, sorted) that lie in the window; those outside it are
+  // removed from *image_pixels.
+  PixelList PixelsOfImage(std::vector<std::uint32_t>* image_pixels) const;
   std::uint64_t Counter(int frame_index, int pixel) const;  // the draw's index
   std::uint64_t PairHash(std::uint64_t counter) const;
 
