@@ -180,16 +180,47 @@ PanelRegion RegionFromRectangle(const camera::Intrinsics& in, const PanelRectang
   const int u1 = std::min(in.width - 1, static_cast<int>(std::ceil(umax)) + 2);
   const int v0 = std::max(0, static_cast<int>(std::floor(vmin)) - 2);
   const int v1 = std::min(in.height - 1, static_cast<int>(std::ceil(vmax)) + 2);
-  Eigen::Vector2d st;
   const PixelNormalizer normalized(in);
+  auto inside = [&](int u, int v) {
+    const Eigen::Vector2d r = normalized(u, v);
+    Eigen::Vector2d st;
+    return rect.PlaneCoordinates({r.x(), r.y(), 1.0}, &st) && std::fabs(st.x()) <= half_w &&
+           std::fabs(st.y()) <= half_h;
+  };
+  // Row by row: a row's pixels inside a convex quadrilateral are one run, and the next row's
+  // run starts and ends near this one's, so each run's ends are found by walking from the last
+  // row's ends (testing only the pixels on the way) and the pixels between them are inside. A
+  // row whose run is not found that way is scanned whole.
+  int lo = -1, hi = -1;  // the last row's run; lo < 0: none
   for (int v = v0; v <= v1; ++v) {
-    for (int u = u0; u <= u1; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * in.width + u;
-      const Eigen::Vector2d r = normalized(u, v);
-      if (!rect.PlaneCoordinates({r.x(), r.y(), 1.0}, &st)) continue;
-      if (std::fabs(st.x()) <= half_w && std::fabs(st.y()) <= half_h)
-        region.pixels.push_back(static_cast<std::uint32_t>(i));
+    if (lo >= 0) {
+      if (inside(lo, v)) {
+        while (lo > u0 && inside(lo - 1, v)) --lo;
+      } else {
+        while (lo < hi && !inside(lo + 1, v)) ++lo;
+        lo = lo < hi ? lo + 1 : -1;  // past the last run: scan the row
+      }
     }
+    if (lo >= 0) {
+      if (hi < lo) hi = lo;
+      if (inside(hi, v)) {
+        while (hi < u1 && inside(hi + 1, v)) ++hi;
+      } else {
+        while (hi > lo && !inside(hi - 1, v)) --hi;
+        --hi;
+      }
+    } else {
+      for (lo = u0; lo <= u1 && !inside(lo, v); ++lo) {
+      }
+      if (lo > u1) {
+        lo = -1;
+        continue;
+      }
+      for (hi = u1; !inside(hi, v); --hi) {
+      }
+    }
+    const std::uint32_t row = static_cast<std::uint32_t>(v) * static_cast<std::uint32_t>(in.width);
+    for (int u = lo; u <= hi; ++u) region.pixels.push_back(row + static_cast<std::uint32_t>(u));
   }
   FinishRegion(&region);
   return region;

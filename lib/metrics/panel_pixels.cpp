@@ -16,16 +16,25 @@ bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
                           const std::vector<double>& weight_per_mean,
                           const std::vector<double>& weight,
                           const std::vector<std::uint8_t>& use, Plane* plane) {
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  // The rays are (x, y, 1): the normal matrix's six distinct sums are kept.
+  double sw = 0, swx = 0, swy = 0, swxx = 0, swxy = 0, swyy = 0;
   Eigen::Vector3d atb = Eigen::Vector3d::Zero();
   int used = 0;
   for (std::size_t k = 0; k < rays.size(); ++k) {
     if (!use[k]) continue;
-    ata += weight[k] * rays[k] * rays[k].transpose();
+    const double w = weight[k], x = rays[k].x(), y = rays[k].y();
+    sw += w;
+    swx += w * x;
+    swy += w * y;
+    swxx += w * x * x;
+    swxy += w * x * y;
+    swyy += w * y * y;
     atb += weight_per_mean[k] * rays[k];
     ++used;
   }
   if (used < 3) return false;
+  Eigen::Matrix3d ata;
+  ata << swxx, swxy, swx, swxy, swyy, swy, swx, swy, sw;
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
   const Eigen::Vector3d k = ldlt.solve(atb);
   const double len = k.norm();

@@ -1,9 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include <Eigen/Geometry>
 
+#include "camera/intrinsics.h"
+#include "metrics/geometry.h"
 #include "metrics/panel_pixels.h"
 #include "panel/extract.h"
 #include "synthetic_scene.h"
@@ -260,6 +263,67 @@ TEST(DecidePanelPixels, ADenseBackgroundStripDoesNotPullASparsePanelsPlane) {
   EXPECT_NEAR(decided.plane.DepthOnRay(Eigen::Vector3d(-0.03, 0.0, 1.0)), panel_z, 0.1);
   EXPECT_EQ(decided.behind, strip);
   EXPECT_EQ(decided.on_plane, panel);
+}
+
+// The region is drawn row by row from the last row's ends; every pixel of the image tested on
+// its own must give the same pixels: rectangles near and far, turned about every axis, partly
+// outside the image, on a pinhole camera and on one with lens distortion.
+TEST(RegionFromRectangle, EqualsTheTestOfEveryPixel) {
+  std::mt19937 rng(20261124);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto in = [&](double a, double b) { return a + (b - a) * unit(rng); };
+  camera::Intrinsics pinhole;
+  pinhole.width = 320;
+  pinhole.height = 180;
+  pinhole.fx = pinhole.fy = 160.0;
+  pinhole.ppx = 160.3;
+  pinhole.ppy = 89.6;
+  camera::Intrinsics lens = pinhole;
+  lens.coeffs = {-0.05, 0.01, 0.001, -0.001, 0.0};
+  int drawn = 0, cut = 0;
+  for (const camera::Intrinsics& cam : {pinhole, lens}) {
+    for (int trial = 0; trial < 300; ++trial) {
+      metrics::PanelRectangle rect;
+      const Eigen::Matrix3d turn =
+          (Eigen::AngleAxisd(in(-1.2, 1.2), Eigen::Vector3d::UnitY()) *
+           Eigen::AngleAxisd(in(-0.6, 0.6), Eigen::Vector3d::UnitX()) *
+           Eigen::AngleAxisd(in(-0.8, 0.8), Eigen::Vector3d::UnitZ()))
+              .toRotationMatrix();
+      const double z = in(1.0, 20.0);
+      rect.center_m = {in(-1.2, 1.2) * z, in(-0.7, 0.7) * z, z};
+      rect.axis_width = turn * Eigen::Vector3d::UnitX();
+      rect.axis_up = turn * -Eigen::Vector3d::UnitY();
+      rect.plane.normal = turn * -Eigen::Vector3d::UnitZ();
+      rect.plane.offset_m = -rect.plane.normal.dot(rect.center_m);
+      rect.width_m = in(0.05, 3.0);
+      rect.height_m = in(0.05, 3.0);
+      const double margin = trial % 3 == 0 ? 0.0 : trial % 3 == 1 ? 0.5 : 2.0;
+      const metrics::PanelRegion region = metrics::RegionFromRectangle(cam, rect, margin);
+      if (region.outline_px.size() != 4) continue;
+      const Eigen::Vector2d foot = metrics::PixelFootprint(cam, rect);
+      const double half_w = 0.5 * rect.width_m - margin * foot.x();
+      const double half_h = 0.5 * rect.height_m - margin * foot.y();
+      std::vector<std::uint32_t> every;
+      for (int v = 0; v < cam.height; ++v)
+        for (int u = 0; u < cam.width; ++u) {
+          const Eigen::Vector2d r = camera::PixelToNormalized(cam, {u, v});
+          Eigen::Vector2d st;
+          if (half_w > 0 && half_h > 0 && rect.PlaneCoordinates({r.x(), r.y(), 1.0}, &st) &&
+              std::fabs(st.x()) <= half_w && std::fabs(st.y()) <= half_h)
+            every.push_back(static_cast<std::uint32_t>(v * cam.width + u));
+        }
+      ASSERT_EQ(region.pixels, every) << "trial " << trial << " at " << z << " m";
+      if (!every.empty()) ++drawn;
+      for (const Eigen::Vector2d& c : region.outline_px)
+        if (c.x() < 0 || c.y() < 0 || c.x() > cam.width - 1 || c.y() > cam.height - 1) {
+          cut += !every.empty();
+          break;
+        }
+    }
+  }
+  // The trials drew regions, some of them cut by the image's border.
+  EXPECT_GT(drawn, 300);
+  EXPECT_GT(cut, 100);
 }
 
 }  // namespace
