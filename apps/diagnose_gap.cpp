@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <iostream>
 #include <thread>
+#include <vector>
 
 #include "args.h"
 #include "memory.h"
@@ -49,6 +50,8 @@ constexpr char kUsage[] =
 "  --min-effect-shrink P  an effect is kept only if the outer folds' selections, simulated,\n"
     "                       remove P % of the calibrated base's held-out gap (10)\n"
     "  --min-own-shrink P   and only if leaving it out of them brings back P % of it (10)\n"
+    "  --case NAME          --cases: only this case (as named in the table's first column;\n"
+    "                       repeatable; \"no effect\" for the 20 null tables)\n"
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
     "                       scripts/make_field_campaign.py's bags, offset -0.25 px)\n"
     "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
@@ -79,6 +82,7 @@ int main(int argc, char** argv) {
   io::InstallSignalCleanup();
   std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;
   bool cases = false;
+  std::vector<std::string> only_cases;  // --case
   double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
   gap::DiagnoseParams params;
   sim::SimParams base;
@@ -99,6 +103,7 @@ int main(int argc, char** argv) {
       else if (a == "--threads") threads = args.Number(true, 1, 256);
       else if (a == "--cases") cases = true;
       else if (a == "--field") real_csv = args.Value();
+      else if (a == "--case") only_cases.push_back(args.Value());
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
       else throw BadInput("unknown argument '" + a + "' (see diagnose_gap --help)");
@@ -129,8 +134,22 @@ int main(int argc, char** argv) {
                          {real_csv, protocol_file, sensor_file}, 4e6);
 
     if (cases) {  // tables at seeds S + 999 + i, the null suite at S + 1999 + i
-      std::vector<gap::CaseOutcome> outcomes =
-          gap::RunWithheldCases(base, gap::DefaultWithheldCases(), params, base.seed + 999);
+      const std::vector<gap::WithheldCase> all = gap::DefaultWithheldCases();
+      std::vector<int> only;  // --case: those named (their seeds as in the whole suite)
+      bool nulls_too = only_cases.empty();
+      for (const std::string& name : only_cases) {
+        if (name == "no effect") {
+          nulls_too = true;
+          continue;
+        }
+        const auto it = std::find_if(all.begin(), all.end(),
+                                     [&](const gap::WithheldCase& c) { return c.name == name; });
+        if (it == all.end()) throw BadInput("--case: no case named '" + name + "'");
+        only.push_back(static_cast<int>(it - all.begin()));
+      }
+      std::vector<gap::CaseOutcome> outcomes;
+      if (only_cases.empty() || !only.empty())
+        outcomes = gap::RunWithheldCases(base, all, params, base.seed + 999, only);
       if (!real_csv.empty()) {  // a campaign of field bags through panel_extract (--field)
         std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(real_csv);
         gap::ScreenRows(gap::DesignRulesOf(base.sensor), &rows);
@@ -143,7 +162,8 @@ int main(int argc, char** argv) {
         outcomes.back().gap_json = json;
       }
       const std::vector<gap::CaseOutcome> nulls =
-          gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999);
+          nulls_too ? gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999)
+                    : std::vector<gap::CaseOutcome>{};
       const std::string table = gap::FormatCases(outcomes, nulls);
       std::fputs(table.c_str(), stdout);
       if (!out_dir.empty()) {  // the table, and each case's gap.json in DIR/cases/

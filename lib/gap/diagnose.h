@@ -16,9 +16,11 @@
 //     parameters shared or one set per scenario (the better by BIC), ranked by
 //     ΔBIC = D(reference) − D(effect) − k·ln n and by its held-out gain (the reference's held-out
 //     deviance minus its own); each metric's dispersion φ (≥ 1: how much wider than the
-//     replicates' noise its residuals about the reference are) puts the metrics on one footing.
-//     Forward selection then adds the effect of largest ΔBIC while it earns both ΔBIC > 0 and a
-//     held-out gain > 0 (φ re-estimated about the current model at every step). Signatures
+//     replicates' noise and placement its residuals are about the widest model, every
+//     continuous candidate fitted together: about the reference, a missing effect would widen
+//     its own metric's φ until that metric no longer counts) puts the metrics on one footing.
+//     Forward selection then adds the effect of largest held-out gain while it earns both
+//     ΔBIC > 0 and a held-out gain > 0 (at that φ). Signatures
 //     (each effect's change of the metrics at a typical size, in noise units, the calibration's
 //     directions projected out) are compared pairwise: |r| ≥ confounded_r is reported as
 //     confounded, and an effect confounded with one already selected is not added.
@@ -189,7 +191,7 @@ struct DiagnoseResult {
   std::vector<sim::ScenarioParams> configured, calibrated;  // per scenario
   ModelFit calibration;           // the calibrated base (reference)
   GapStat calibration_in, calibration_heldout;
-  std::vector<double> dispersion;  // per compared metric, about the calibrated base
+  std::vector<double> dispersion;  // per compared metric, about the widest model (select.h)
   std::vector<EffectResult> effects;  // every candidate alone, best ΔBIC first
   std::vector<Confounded> confounded;
   std::vector<Confounded> correlations;  // every pair of effects' signature correlation

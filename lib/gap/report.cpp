@@ -406,8 +406,9 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
     << "Per recording and metric, z = (real − simulated) / noise. The noise of each metric is "
     << "measured, not assumed; how is said per metric. The gap is the mean of z² over the "
     << "table: 1 means the simulator is as close to the camera as the camera is to itself; the "
-    << "dispersion φ is how much wider than that the residuals about the calibrated simulator are "
-    << "(it weighs the metrics against each other in the fits).\n\n"
+    << "dispersion φ is how much wider than that the residuals are about the widest model (every "
+    << "continuous candidate effect fitted together; it weighs the metrics against each other "
+    << "in the fits).\n\n"
     << "| metric | unit | noise at 10 m | noise ∝ (Z/10 m)^ | measured from | φ | baseline gap | "
        "held-out cells |\n|---|---|---|---|---|---|---|---|\n";
   for (int k = 0; k < kk; ++k) {

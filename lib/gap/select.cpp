@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <cstdio>
+#include <cstdlib>
 
 #include <Eigen/Dense>
 
@@ -218,17 +220,61 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
     std::vector<double> mu;
   };
   std::vector<Alone> alone(n_cand);
-  common::ForEachIndex(static_cast<size_t>(n_cand), threads, [&](size_t k) {
-    const int i = static_cast<int>(k);
-    Alone& a = alone[k];
-    a.shared = FitCandidate(fixed, i, false, train);
-    if (design.num_scenarios() > 1) a.per = FitCandidate(fixed, i, true, train, &a.shared);
-    if (!a.shared.success && !a.per.success) return;
-    const double per_bic = a.per.success ? dbic(a.per) : -INFINITY;
-    const ModelFit& f = per_bic > dbic(a.shared) ? a.per : a.shared;
-    a.ho = CrossValidate(fixed, {f.terms[0].term}, fold, num_folds, f, train);
-    if (a.ho.success) a.mu = fixed.Predict(f);
-  });
+  auto fit_alone = [&]() {
+    common::ForEachIndex(static_cast<size_t>(n_cand), threads, [&](size_t k) {
+      const int i = static_cast<int>(k);
+      Alone& a = alone[k];
+      a = Alone{};
+      a.shared = FitCandidate(fixed, i, false, train);
+      if (design.num_scenarios() > 1) a.per = FitCandidate(fixed, i, true, train, &a.shared);
+      if (!a.shared.success && !a.per.success) return;
+      const double per_bic = a.per.success ? dbic(a.per) : -INFINITY;
+      const ModelFit& f = per_bic > dbic(a.shared) ? a.per : a.shared;
+      a.ho = CrossValidate(fixed, {f.terms[0].term}, fold, num_folds, f, train);
+      if (a.ho.success) a.mu = fixed.Predict(f);
+    });
+  };
+  fit_alone();
+
+  // Dispersion about the widest model: every candidate the calibration does not absorb and
+  // whose axes are all continuous (a discrete width cannot be turned off), shared, fitted
+  // together from each one's fit alone, in units of the noise (φ = 1), then once more at the
+  // dispersion found. About the calibrated base, an effect the simulator lacks would count as
+  // noise: it widens its own metric's φ (a 6 % depth scale: the median's φ 7), until the metric
+  // where it lives no longer tells candidates apart and other metrics decide. The candidates
+  // alone are refitted at that φ, and every fit of the selection keeps it.
+  {
+    std::vector<Term> wide;
+    ModelFit start = m0;
+    for (int i = 0; i < n_cand; ++i) {
+      const Candidate& cand = sims.surfaces[i].candidate;
+      const bool discrete = std::any_of(cand.axes.begin(), cand.axes.end(),
+                                        [](const Axis& a) { return a.discrete; });
+      if (model.Absorbs(i) || discrete) continue;
+      wide.push_back(Term{i, false, {std::vector<int>(cand.axes.size(), -1)}});
+      if (alone[i].shared.success) start.terms.push_back(alone[i].shared.terms[0]);
+    }
+    const std::vector<double> phi_base = model.dispersion();
+    model.SetDispersion(std::vector<double>(model.num_metrics(), 1.0));
+    ModelFit wide_fit;
+    for (int round = 0; round < 2 && !wide.empty(); ++round) {
+      wide_fit = FitTerms(model, wide, train, round > 0 ? &wide_fit : &start);
+      if (!wide_fit.success) break;
+      model.SetDispersion(Dispersion(model, model.Predict(wide_fit), train));
+    }
+    if (!wide_fit.success) {
+      model.SetDispersion(phi_base);
+    } else {
+      m0 = FitTerms(model, {}, train, &m0);
+      m0_ho = CrossValidate(model, {}, fold, num_folds, m0, train);
+      if (!m0.success || !m0_ho.success) {
+        r.message = "calibration: " + (m0.success ? m0_ho.message : m0.message);
+        return r;
+      }
+      r.dispersion = model.dispersion();
+      fit_alone();
+    }
+  }
   for (int i = 0; i < n_cand; ++i) {
     EffectResult e;
     e.name = sims.surfaces[i].candidate.effect;
@@ -291,12 +337,6 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
   ModelFit current = m0;
   HeldOut current_ho = m0_ho;
   for (int step = 0; step < params.max_selected; ++step) {
-    if (step > 0) {  // dispersion about the current model
-      model.SetDispersion(Dispersion(model, model.Predict(current), train));
-      current = FitTerms(model, terms, train, &current);
-      current_ho = CrossValidate(model, terms, fold, num_folds, current, train);
-      if (!current.success || !current_ho.success) break;
-    }
     int best = -1;
     double best_dbic = 0, best_gain = 0;  // the largest held-out gain among those earning both
     ModelFit best_fit;

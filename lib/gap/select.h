@@ -18,7 +18,7 @@ struct Selection {
   std::string message;
   ModelFit m0;                         // the calibrated base
   HeldOut m0_ho;
-  std::vector<double> dispersion;      // φ about the calibrated base
+  std::vector<double> dispersion;      // φ about the widest model
   std::vector<EffectResult> effects;   // every candidate alone, in the candidates' order
   std::vector<double> r2_sigma, r2_p;  // share of each signature along the calibration
   std::vector<Confounded> confounded, correlations;
@@ -37,8 +37,9 @@ double Shrink(const GapStat& before, const GapStat& after);
 std::vector<double> Dispersion(const GapModel& model, const std::vector<double>& mu,
                                const std::vector<char>& cells);
 
-// Sets the model's dispersion (about the calibrated base, then about each step's model) and its
-// calibration-absorbing candidates; the model's design and simulations are the whole table's.
+// Sets the model's dispersion (about the widest model: every candidate not absorbed by the
+// calibration and without a discrete axis, fitted together) and its calibration-absorbing
+// candidates; the model's design and simulations are the whole table's.
 Selection Select(GapModel& model, const std::vector<char>& train, const std::vector<int>& fold,
                  int num_folds, const DiagnoseParams& params);
 

@@ -282,24 +282,35 @@ TEST(CaseTables, PlacementIsSharedByATestPointsRecordingsAndTheUnitHas32Rows) {
 // rode beside the right one until each had to carry its own part (--min-own-shrink: panel_tilt
 // small) and one outside the registry; run as scripts/gap_cases.sh runs them
 // (the tables at seed 1000 + index, the diagnosis at seed 1, 10 frames a cell), and five of
-// the tables without an effect (seeds 2000–2004): they must keep passing. The whole suite and
-// the other fifteen null tables take 12 minutes: scripts/gap_cases.sh.
+// the tables without an effect (seeds 2000–2004): they must keep passing. Beside them, a 6 %
+// depth scale must be named as itself at its size: with the dispersion measured about the
+// calibrated base, the scale's own gap widened the median's φ to 7 and a disparity offset was
+// selected instead (its simulated shrink, 44 %, stays under the 70 % a pass needs: the other
+// metrics' noise floor is part of the gap it is measured on). The whole suite and the other
+// fifteen null tables take about 5 minutes: scripts/gap_cases.sh.
 TEST(Cases, ThosePassingAtSeedOneKeepPassing) {
   const sim::SimParams base = Base();
   DiagnoseParams params;
   params.simulate.threads = 2;
   const std::vector<WithheldCase> cases = DefaultWithheldCases();
   std::vector<int> only;
-  for (const char* name : {"disparity_offset large", "temporal_drift large",
+  for (const char* name : {"disparity_offset large", "radial_disparity_residual small",
                            "radial_disparity_residual large", "panel_tilt small",
-                           "range_vs_depth large", "one test point read 1 m far (outside)"})
+                           "range_vs_depth large", "one test point read 1 m far (outside)",
+                           "depth_scale large"})
     for (size_t i = 0; i < cases.size(); ++i)
       if (cases[i].name == name) only.push_back(static_cast<int>(i));
-  ASSERT_EQ(only.size(), 6u);
+  ASSERT_EQ(only.size(), 7u);
   sim::SimParams at_one = base;
   at_one.seed = 1;
-  for (const CaseOutcome& o : RunWithheldCases(at_one, cases, params, 1000, only))
+  for (const CaseOutcome& o : RunWithheldCases(at_one, cases, params, 1000, only)) {
+    if (o.truth.name == "depth_scale large") {
+      EXPECT_EQ(o.selected, std::vector<std::string>{"depth_scale"}) << o.why;
+      EXPECT_LT(o.max_rel_error, 0.2) << o.why;
+      continue;
+    }
     EXPECT_TRUE(o.pass) << o.truth.name << ": " << o.why;
+  }
   const std::vector<CaseOutcome> nulls =
       RunWithheldCases(at_one, NullCases(5), params, 2000);
   for (const CaseOutcome& o : nulls) EXPECT_TRUE(o.pass) << o.truth.name << ": " << o.why;
