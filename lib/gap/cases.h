@@ -46,11 +46,17 @@ struct OutsideEffect {
     // One test point read coef metres far in every recording (a wrong tape mark, a reflective
     // object beside it): median_m and mean_m += coef at (light, distance_m, angle_deg).
     kPointStep,
+    // A far over-read that starts at a range (a return from behind the panel, off a reflector
+    // or the ground, that the camera mixes in beyond some distance): median_m and mean_m +=
+    // coef at distances ≥ from_distance_m, nothing nearer. No registered effect is a step in
+    // distance: a disparity offset grows as D², a depth scale as D.
+    kFarStep,
   } kind = kNone;
   double coef = 0;
   std::string light;
   double distance_m = 0, angle_deg = 0;
-  double from_distance_m = 0;  // kFarOverRead: cells at or beyond this distance are "right"
+  double from_distance_m = 0;  // kFarOverRead, kFarStep: cells at or beyond this distance are
+                               // "right" (kFarStep: and the only ones moved)
 };
 
 struct WithheldCase {

@@ -178,14 +178,15 @@ std::set<size_t> NamedRows(const Json& u, const std::vector<records::PanelMetric
 }
 
 // Rows an outside effect makes "right" for `unexplained`, and those it must include (the far
-// end of an over-read; the test point of a step).
+// end of an over-read or of a far step; the test point of a step).
 void RightRows(const OutsideEffect& o, const std::vector<records::PanelMetrics>& rows,
                std::set<size_t>* allowed, std::set<size_t>* needed) {
   double far = 0;
   for (const auto& r : rows) far = std::max(far, r.distance_m);
   for (size_t i = 0; i < rows.size(); ++i) {
     const auto& r = rows[i];
-    if (o.kind == OutsideEffect::kFarOverRead && r.distance_m >= o.from_distance_m) {
+    if ((o.kind == OutsideEffect::kFarOverRead || o.kind == OutsideEffect::kFarStep) &&
+        r.distance_m >= o.from_distance_m) {
       allowed->insert(i);
       if (r.distance_m == far) needed->insert(i);
     }

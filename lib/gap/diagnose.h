@@ -33,8 +33,9 @@
 //     the whole table stays only if it is selected in at least half of the outer folds and
 //     the outer folds' selections gain on their held-out cells.
 //  5. What is left: the cells still significant after the selected effects; when they are,
-//     where the rest lies (factor cells), its size and its form (∝ D, ∝ D², one test point),
-//     never pinned on a registered effect that did not earn (open world).
+//     where the rest lies (factor cells), its size and its form (∝ D, ∝ D², a step from a
+//     distance on, one test point), never pinned on a registered effect that did not earn
+//     (open world).
 
 #include <string>
 #include <vector>
@@ -164,7 +165,7 @@ struct Unexplained {
   double size_se = 0;       // its standard error (noise and placement scatter)
   double size_at_max = 0;   // at the largest distance of those cells (the form's value)
   std::string unit;
-  std::string form;         // "∝ D", "∝ D²", "constant", "one test point"
+  std::string form;         // "∝ D", "∝ D²", "constant", "step from X m", "one test point"
   double share_pct = 0;     // of the remaining Σz² in those cells
   double chi2 = 0;          // Σz² of those cells
   int df = 0;

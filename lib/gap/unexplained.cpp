@@ -206,42 +206,71 @@ std::vector<double> OwnDepartures(const GapModel& m, const std::vector<double>& 
   return own;
 }
 
-// The largest share of the weighted residual of metric k that one law in distance (constant,
-// ∝ D, ∝ D²) explains over the whole table: max_j (Σ w·f_j·r)² / Σ w·f_j², against the same with
-// signs drawn for test points as wholes. Its p-value.
+// The largest share of the weighted residual of metric k that one law in distance explains over
+// the whole table: max_j (Σ w·f_j·r)² / Σ w·f_j², against the same with signs drawn for test
+// points as wholes. The laws: constant, ∝ D, ∝ D², and a step from each distance of the table
+// but the nearest on (zero nearer: a return the camera mixes in beyond some range); the maximum
+// over all of them is what the drawn signs are held against, so the extra laws are paid for in
+// the p-value. Its p-value; *step_from: the step's first distance when a step explains the most
+// by more than a parameter's price, else NaN.
 double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
-                        const std::vector<std::vector<int>>& blocks, const RestParams& params) {
+                        const std::vector<std::vector<int>>& blocks, const RestParams& params,
+                        double* step_from) {
   const Design& d = m.design();
   const int kk = d.num_metrics();
+  std::vector<double> levels;
+  for (const auto& c : d.cells) levels.push_back(c.distance_m);
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  const size_t nf = 3 + (levels.size() > 1 ? levels.size() - 1 : 0);
+  auto law = [&](size_t j, double dd) {
+    return j == 0 ? 1.0 : j == 1 ? dd : j == 2 ? dd * dd : dd >= levels[j - 2] ? 1.0 : 0.0;
+  };
   // Per test point and law: Σ w·f·r and Σ w·f².
   const size_t nb = blocks.size();
-  std::vector<std::array<double, 3>> wfr(nb, {0, 0, 0});
-  std::array<double, 3> wff = {0, 0, 0};
+  std::vector<std::vector<double>> wfr(nb, std::vector<double>(nf, 0.0));
+  std::vector<double> wff(nf, 0.0);
   for (size_t b = 0; b < nb; ++b)
     for (int c : blocks[b]) {
       if (c < 0) continue;
       const size_t o = static_cast<size_t>(c) * kk + k;
       if (!m.valid(o) || !std::isfinite(mu[o])) continue;
       const double w = 1.0 / (m.noise(o) * m.noise(o)), r = m.y(o) - mu[o];
-      const double dd = d.cells[c].distance_m, f[3] = {1.0, dd, dd * dd};
-      for (int j = 0; j < 3; ++j) wfr[b][j] += w * f[j] * r, wff[j] += w * f[j] * f[j];
+      for (size_t j = 0; j < nf; ++j) {
+        const double f = law(j, d.cells[c].distance_m);
+        wfr[b][j] += w * f * r, wff[j] += w * f * f;
+      }
     }
-  auto stat = [&](const std::vector<int>& sign) {
+  auto stat = [&](const std::vector<int>& sign, size_t* which) {
     double best = 0;
-    for (int j = 0; j < 3; ++j) {
+    for (size_t j = 0; j < nf; ++j) {
       double sum = 0;
       for (size_t b = 0; b < nb; ++b) sum += sign[b] * wfr[b][j];
-      if (wff[j] > 0) best = std::max(best, sum * sum / wff[j]);
+      if (wff[j] > 0 && sum * sum / wff[j] > best) best = sum * sum / wff[j], *which = j;
     }
     return best;
   };
-  const double observed = stat(std::vector<int>(nb, 1));
+  size_t which = 0, ignored = 0;
+  const double observed = stat(std::vector<int>(nb, 1), &which);
+  // The form described: a step's distance is one more thing chosen, so a step is named only
+  // when it explains more than the best law over the whole table by ln(test points), BIC's
+  // price of a parameter (else an offset's D² would often read as a step from the middle).
+  *step_from = NAN;
+  if (which >= 3) {
+    double best_law = 0;
+    for (size_t j = 0; j < 3; ++j) {
+      double sum = 0;
+      for (size_t b = 0; b < nb; ++b) sum += wfr[b][j];
+      if (wff[j] > 0) best_law = std::max(best_law, sum * sum / wff[j]);
+    }
+    if (observed - best_law > std::log(static_cast<double>(nb))) *step_from = levels[which - 2];
+  }
   std::mt19937_64 rng(params.seed + 1);
   std::vector<int> sign(nb);
   int as_large = 0;
   for (int i = 0; i < params.permutations; ++i) {
     for (size_t b = 0; b < nb; ++b) sign[b] = rng() % 2 ? 1 : -1;
-    as_large += stat(sign) >= observed;
+    as_large += stat(sign, &ignored) >= observed;
   }
   return (1.0 + as_large) / (1.0 + params.permutations);
 }
@@ -314,11 +343,22 @@ std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<doubl
     // test point, constant or growing with distance, is tested by signs drawn for test points
     // as wholes: a placement is as likely short as long.
     if (d.metrics[k] != kMedianBias || pe.empty()) continue;
-    const double p_shared = SharedDepartureP(m, mu, k, blocks, params);
+    double step_from = NAN;
+    const double p_shared = SharedDepartureP(m, mu, k, blocks, params, &step_from);
     if (p_shared >= params.alpha / kk) continue;
-    std::vector<int> all(d.num_cells());
-    for (int c = 0; c < d.num_cells(); ++c) all[c] = c;
-    out.push_back(Describe(m, mu, pe, z, k, "every recording", all, total, p_shared));
+    std::vector<int> cells;
+    for (int c = 0; c < d.num_cells(); ++c)
+      if (!(d.cells[c].distance_m < step_from)) cells.push_back(c);  // NaN: every cell
+    if (std::isnan(step_from)) {
+      out.push_back(Describe(m, mu, pe, z, k, "every recording", cells, total, p_shared));
+      continue;
+    }
+    // A step: the same departure at every distance from step_from on, none nearer.
+    Unexplained u = Describe(m, mu, pe, z, k, "distance ≥ " + Num(step_from) + " m", cells,
+                             total, p_shared);
+    u.form = "step from " + Num(step_from) + " m";
+    u.size_at_max = u.size;
+    out.push_back(u);
   }
   // The test points placed beyond the placement law, in the median bias.
   for (int k = 0; k < kk && !pe.empty(); ++k) {

@@ -31,8 +31,10 @@ struct RestParams {
 // and emitter slot of another test point), so that heavy-tailed, skewed or bounded residuals
 // and the placement a test point's recordings share are the reference, not a normal law.
 // Permutations keep what the whole table shares; in the median bias, a departure of every test
-// point (constant, ∝ D or ∝ D²) is tested against signs drawn for test points as wholes (a
-// placement is as likely short as long) and described as "every recording".
+// point (constant, ∝ D or ∝ D²), or of every test point from some distance on (a step: a return
+// the camera mixes in beyond some range), is tested against signs drawn for test points as
+// wholes (a placement is as likely short as long), the best of those laws against the best of
+// the drawn tables', and described as "every recording" or "distance ≥ X m".
 // Test points the placement estimate flags in the median bias (a panel set off by more than its
 // law allows) are listed too, as one test point each; of a flagged pair of partners of the two
 // lights, the one that departs from the other test points of its light and distance. Sorted by
