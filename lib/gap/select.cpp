@@ -220,12 +220,14 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
     std::vector<double> mu;
   };
   std::vector<Alone> alone(n_cand);
-  auto fit_alone = [&]() {
+  // shared_only: the shared fits alone, the widest model's start.
+  auto fit_alone = [&](bool shared_only) {
     common::ForEachIndex(static_cast<size_t>(n_cand), threads, [&](size_t k) {
       const int i = static_cast<int>(k);
       Alone& a = alone[k];
       a = Alone{};
       a.shared = FitCandidate(fixed, i, false, train);
+      if (shared_only) return;
       if (design.num_scenarios() > 1) a.per = FitCandidate(fixed, i, true, train, &a.shared);
       if (!a.shared.success && !a.per.success) return;
       const double per_bic = a.per.success ? dbic(a.per) : -INFINITY;
@@ -234,7 +236,7 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
       if (a.ho.success) a.mu = fixed.Predict(f);
     });
   };
-  fit_alone();
+  fit_alone(true);
 
   // Dispersion about the widest model: every candidate the calibration does not absorb and
   // whose axes are all continuous (a discrete width cannot be turned off), shared, fitted
@@ -264,6 +266,7 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
     }
     if (!wide_fit.success) {
       model.SetDispersion(phi_base);
+      fit_alone(false);
     } else {
       m0 = FitTerms(model, {}, train, &m0);
       m0_ho = CrossValidate(model, {}, fold, num_folds, m0, train);
@@ -272,7 +275,7 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
         return r;
       }
       r.dispersion = model.dispersion();
-      fit_alone();
+      fit_alone(false);
     }
   }
   for (int i = 0; i < n_cand; ++i) {
