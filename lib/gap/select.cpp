@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <cstdio>
-#include <cstdlib>
 
 #include <Eigen/Dense>
 

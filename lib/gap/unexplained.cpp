@@ -1,7 +1,6 @@
 #include "gap/unexplained.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -241,9 +240,10 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
         wfr[b][j] += w * f * r, wff[j] += w * f * f;
       }
     }
-  auto stat = [&](const std::vector<int>& sign, size_t* which) {
+  // The best of the first `laws` laws under the signs, and which.
+  auto stat = [&](const std::vector<int>& sign, size_t laws, size_t* which) {
     double best = 0;
-    for (size_t j = 0; j < nf; ++j) {
+    for (size_t j = 0; j < laws; ++j) {
       double sum = 0;
       for (size_t b = 0; b < nb; ++b) sum += sign[b] * wfr[b][j];
       if (wff[j] > 0 && sum * sum / wff[j] > best) best = sum * sum / wff[j], *which = j;
@@ -251,26 +251,21 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
     return best;
   };
   size_t which = 0, ignored = 0;
-  const double observed = stat(std::vector<int>(nb, 1), &which);
+  const std::vector<int> as_measured(nb, 1);
+  const double observed = stat(as_measured, nf, &which);
   // The form described: a step's distance is one more thing chosen, so a step is named only
   // when it explains more than the best law over the whole table by ln(test points), BIC's
   // price of a parameter (else an offset's D² would often read as a step from the middle).
   *step_from = NAN;
-  if (which >= 3) {
-    double best_law = 0;
-    for (size_t j = 0; j < 3; ++j) {
-      double sum = 0;
-      for (size_t b = 0; b < nb; ++b) sum += wfr[b][j];
-      if (wff[j] > 0) best_law = std::max(best_law, sum * sum / wff[j]);
-    }
-    if (observed - best_law > std::log(static_cast<double>(nb))) *step_from = levels[which - 2];
-  }
+  if (which >= 3 &&
+      observed - stat(as_measured, 3, &ignored) > std::log(static_cast<double>(nb)))
+    *step_from = levels[which - 2];
   std::mt19937_64 rng(params.seed + 1);
   std::vector<int> sign(nb);
   int as_large = 0;
   for (int i = 0; i < params.permutations; ++i) {
     for (size_t b = 0; b < nb; ++b) sign[b] = rng() % 2 ? 1 : -1;
-    as_large += stat(sign, &ignored) >= observed;
+    as_large += stat(sign, nf, &ignored) >= observed;
   }
   return (1.0 + as_large) / (1.0 + params.permutations);
 }
