@@ -92,6 +92,81 @@ DiagnoseResult Diagnose(const std::vector<records::PanelMetrics>& real,
   }
 }
 
+namespace {
+
+// Student's t at 97.5 % for `dof` degrees of freedom (1.96 beyond the table).
+double StudentT975(int dof) {
+  static const double kT[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306,
+                              2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120,
+                              2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064,
+                              2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
+  return dof >= 1 && dof <= 30 ? kT[dof - 1] : 1.96;
+}
+
+// The selected terms refitted without each fold's cells (SizeSpread), and their intervals
+// widened to the refits' spread.
+std::vector<SizeSpread> SpreadOverFolds(const GapModel& model, const std::vector<int>& fold,
+                                        int num_folds, ModelFit* selected) {
+  const size_t n_terms = selected->terms.size();
+  std::vector<SizeSpread> out(n_terms);
+  std::vector<Term> terms;
+  std::vector<char> eligible(n_terms, 0);
+  for (size_t i = 0; i < n_terms; ++i) {
+    const TermFit& t = selected->terms[i];
+    terms.push_back(t.term);
+    const Candidate& c = model.surface(t.term.candidate).candidate;
+    eligible[i] = !t.term.per_scenario && c.axes.size() == 1 && !c.axes[0].discrete &&
+                  !t.values.empty() && !t.values[0].empty();
+  }
+  if (std::find(eligible.begin(), eligible.end(), 1) == eligible.end()) return out;
+  std::vector<std::vector<double>> u(n_terms);
+  for (int f = 0; f < num_folds; ++f) {
+    std::vector<char> train(fold.size(), 0);
+    bool held = false;
+    for (size_t c = 0; c < fold.size(); ++c) {
+      train[c] = fold[c] != f;
+      held = held || fold[c] == f;
+    }
+    if (!held) continue;
+    const ModelFit refit = FitTerms(model, terms, train, selected);
+    if (!refit.success || refit.terms.size() != n_terms) continue;
+    for (size_t i = 0; i < n_terms; ++i) {
+      const TermFit& t = refit.terms[i];
+      if (!eligible[i] || t.at_bound[0][0]) continue;
+      out[i].folds.push_back(t.values[0][0]);
+      u[i].push_back(model.ToCoord(t.term.candidate, 0, t.values[0][0]));
+    }
+  }
+  for (size_t i = 0; i < n_terms; ++i) {
+    SizeSpread& s = out[i];
+    const int n = static_cast<int>(u[i].size());
+    if (!eligible[i] || n < 3) continue;
+    TermFit* term = &selected->terms[i];
+    const int cand = term->term.candidate;
+    s.checked = true;
+    double mean = 0, ss = 0;
+    for (double v : u[i]) mean += v / n;
+    for (double v : u[i]) ss += (v - mean) * (v - mean);
+    s.se_folds = std::sqrt((n - 1.0) / n * ss);
+    s.t = StudentT975(n - 1);
+    s.fit_lo = term->ci_lo[0][0];
+    s.fit_hi = term->ci_hi[0][0];
+    const double x = model.ToCoord(cand, 0, term->values[0][0]);
+    const double half = s.t * s.se_folds;
+    double lo = model.ToCoord(cand, 0, s.fit_lo), hi = model.ToCoord(cand, 0, s.fit_hi);
+    if (!std::isfinite(lo)) lo = x;
+    if (!std::isfinite(hi)) hi = x;
+    if (!(x - lo >= half && hi - x >= half)) {
+      s.widened = true;
+      term->ci_lo[0][0] = model.FromCoord(cand, 0, std::min(lo, x - half));
+      term->ci_hi[0][0] = model.FromCoord(cand, 0, std::max(hi, x + half));
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                             const sim::SimParams& base, const DiagnoseParams& params) {
   DiagnoseResult r;
@@ -278,6 +353,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
 
   // How far, and what is left.
   r.selected = current;
+  {
+    GapModel at_phi = model;  // the selection's dispersion
+    at_phi.SetDispersion(r.dispersion);
+    r.size_spread = SpreadOverFolds(at_phi, fold, r.folds, &r.selected);
+  }
   r.z_selected = Scaled(model, model.Predict(current));
   r.z_selected_heldout = Scaled(model, current_ho.mu);
   r.selected_in = Stat(model, r.z_selected, all);

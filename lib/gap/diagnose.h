@@ -31,7 +31,9 @@
 //     predicts its held-out cells additively and is simulated there at its fitted values
 //     (shrink_heldout_nested_pct, shrink_simulated_pct: the headline). An effect selected on
 //     the whole table stays only if it is selected in at least half of the outer folds and
-//     the outer folds' selections gain on their held-out cells.
+//     the outer folds' selections gain on their held-out cells. A selected shared term's 95 %
+//     interval is the wider of its fit's and the spread of its refits without each fold
+//     (SizeSpread).
 //  5. What is left: the cells still significant after the selected effects; when they are,
 //     where the rest lies (factor cells), its size and its form (∝ D, ∝ D², a step from a
 //     distance on, one test point), never pinned on a registered effect that did not earn
@@ -132,6 +134,22 @@ struct NestedFold {
   std::vector<double> effect_gain_simulated;
 };
 
+// A selected term's size without each fold's cells: the selection refitted on the other cells
+// (the delete-a-group jackknife over the folds), beside the fit's own interval, which counts
+// noise and placement scatter only. Where the distances tell different sizes (the simulator's
+// response to the effect is off at one distance, or the effect's law in distance is not the
+// registered one), the refits disagree and the jackknife is the wider: the selected interval is
+// the wider of the two. Shared terms of one continuous axis, with at least three refits holding
+// a value off the grid's edge.
+struct SizeSpread {
+  bool checked = false;
+  std::vector<double> folds;        // the size refitted without each fold's cells
+  double se_folds = NAN;            // √((n − 1)/n · Σ (u_f − ū)²), in the fit's coordinates
+  double t = NAN;                   // Student's t, 97.5 %, n − 1 degrees of freedom
+  double fit_lo = NAN, fit_hi = NAN;  // the fit's own 95 % interval
+  bool widened = false;             // the folds' interval is the wider one
+};
+
 struct Nested {
   bool run = false;
   std::string message;                 // why not run, or a fold's failure
@@ -198,6 +216,7 @@ struct DiagnoseResult {
   std::vector<Confounded> correlations;  // every pair of effects' signature correlation
   std::vector<SelectionStep> steps;
   ModelFit selected;               // the selected effects fitted together (additively)
+  std::vector<SizeSpread> size_spread;  // per selected term; selected's intervals include it
   std::vector<double> z_selected, z_selected_heldout;
   GapStat selected_in, selected_heldout;
   bool verified = false;           // the selected effects were simulated

@@ -96,9 +96,23 @@ std::string Headline(const DiagnoseResult& r) {
     o << "selected: none (no registered effect earns its place in and out of the outer folds)\n";
   } else {
     o << "selected:";
-    for (size_t i = 0; i < r.selected.terms.size(); ++i)
-      o << (i ? ";" : "") << " " << r.candidates[r.selected.terms[i].term.candidate].effect
-        << " (" << ParamsText(r, r.selected.terms[i], false, true) << ")";
+    for (size_t i = 0; i < r.selected.terms.size(); ++i) {
+      const TermFit& t = r.selected.terms[i];
+      const SizeSpread* sp =
+          i < r.size_spread.size() && r.size_spread[i].checked ? &r.size_spread[i] : nullptr;
+      o << (i ? ";" : "") << " " << r.candidates[t.term.candidate].effect << " ("
+        << ParamsText(r, t, sp != nullptr, true);
+      if (sp) {
+        o << ", 95 %";
+        if (sp->widened) {
+          o << " from its refits without each outer fold's cells (";
+          for (size_t f = 0; f < sp->folds.size(); ++f)
+            o << (f ? ", " : "") << Num(sp->folds[f], 3);
+          o << "); the fit alone [" << Num(sp->fit_lo, 3) << ", " << Num(sp->fit_hi, 3) << "]";
+        }
+      }
+      o << ")";
+    }
     o << "\n";
   }
   for (const auto& d : r.dropped) o << "not kept: " << d << "\n";

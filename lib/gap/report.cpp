@@ -315,6 +315,14 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     ParamsJson(w, "ci95", r, t, true);
     if (i < r.steps.size())
       w.Number("delta_bic", r.steps[i].delta_bic).Number("heldout_gain", r.steps[i].heldout_gain);
+    if (i < r.size_spread.size() && r.size_spread[i].checked) {
+      const SizeSpread& sp = r.size_spread[i];
+      w.BeginObject("over_folds").BeginArray("values");
+      for (double v : sp.folds) w.Number(v);
+      w.EndArray().Number("jackknife_se", sp.se_folds).Number("t", sp.t);
+      w.BeginArray("ci95_fit").Number(sp.fit_lo).Number(sp.fit_hi).EndArray();
+      w.Bool("widened", sp.widened).EndObject();
+    }
     w.EndObject();
   }
   w.EndArray();
