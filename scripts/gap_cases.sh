@@ -10,14 +10,28 @@
 # when at least 19 of 20 select nothing. Columns: case, injected, selected, recovered, largest
 # size error, simulated shrink, unexplained, pass, every criterion not met.
 # CI (tests/gap/withheld_test.cpp) asserts the criteria and the cases that pass.
-# Usage: scripts/gap_cases.sh [BUILD_DIR] [OUT_DIR] [--no-field]
+# One seed is one draw of every case's noise and placement; --seeds N runs seeds 1 to N (each
+# into OUT_DIR/seed-S) and prints how often each case passes (scripts/gap_cases_seeds.py), also
+# written to OUT_DIR/seeds.md. About 5 minutes a seed on 2 cores.
+# Usage: scripts/gap_cases.sh [BUILD_DIR] [OUT_DIR] [--no-field] [--seeds N]
 #   OUT_DIR/cases.md is written too; the field bags go to OUT_DIR/field (or a temporary folder).
 set -euo pipefail
+trap 'echo "gap_cases: failed at line $LINENO" >&2' ERR
 cd "$(dirname "$0")/.."
 FIELD=1
+SEEDS=0
 ARGS=()
-for a in "$@"; do
-  if [ "$a" = "--no-field" ]; then FIELD=0; else ARGS+=("$a"); fi
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --no-field) FIELD=0 ;;
+    --seeds)
+      [ $# -ge 2 ] && [[ "$2" =~ ^[1-9][0-9]*$ ]] ||
+        { echo "gap_cases: --seeds needs a count >= 1" >&2; exit 2; }
+      SEEDS=$2
+      shift ;;
+    *) ARGS+=("$1") ;;
+  esac
+  shift
 done
 BUILD_DIR=${ARGS[0]:-${BUILD_DIR:-build}}
 OUT_DIR=${ARGS[1]:-}
@@ -41,4 +55,23 @@ if [ "$FIELD" = 1 ]; then
     "$FIELD_DIR" || [ $? -eq 1 ]
   OPTS+=(--field "$FIELD_DIR/field.csv")
 fi
-"$APP" --cases "${OPTS[@]}"
+if [ "$SEEDS" = 0 ]; then
+  "$APP" --cases "${OPTS[@]}"
+  exit 0
+fi
+[ -n "$OUT_DIR" ] || { echo "gap_cases: --seeds needs OUT_DIR" >&2; exit 2; }
+TABLES=()
+for ((s = 1; s <= SEEDS; s++)); do
+  SEED_OPTS=()
+  for o in "${OPTS[@]}"; do SEED_OPTS+=("$o"); done
+  # The --out pair is the seed's own folder.
+  for i in "${!SEED_OPTS[@]}"; do
+    if [ "${SEED_OPTS[$i]}" = "--out" ]; then SEED_OPTS[$((i + 1))]="$OUT_DIR/seed-$s"; fi
+  done
+  echo "gap_cases: seed $s of $SEEDS" >&2
+  "$APP" --cases --seed "$s" "${SEED_OPTS[@]}" > /dev/null
+  TABLES+=("$OUT_DIR/seed-$s/cases.md")
+done
+.venv/bin/python scripts/gap_cases_seeds.py "${TABLES[@]}" > "$OUT_DIR/seeds.md.tmp"
+mv "$OUT_DIR/seeds.md.tmp" "$OUT_DIR/seeds.md"
+cat "$OUT_DIR/seeds.md"

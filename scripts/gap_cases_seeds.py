@@ -1,0 +1,133 @@
+#!/usr/bin/env python3
+"""The withheld cases of the gap diagnosis over several seeds: how often each case passes.
+
+One seed's table (diagnose_gap --cases, docs/gap/cases.md) is one draw of every case's noise and
+placement: a case near a criterion's edge passes at one seed and fails at the next. This reads
+the cases.md of several runs (diagnose_gap --cases --seed S --out DIR/seed-S) and prints, per
+case, the seeds it passes at and what was selected at each, as a Markdown table; then how
+often the 95 % interval of a selected effect that was injected (one parameter, shared by every
+cell) holds the injected size, read from each case's gap.json (DIR/seed-S/cases/): the interval
+gap.json gives, and the fit's own (`over_folds.ci95_fit`, where the refits widened it).
+
+Usage: gap_cases_seeds.py DIR/seed-1/cases.md DIR/seed-2/cases.md ...
+  The seed of each file is read from its folder's name (seed-S), else its position (1, 2, ...).
+"""
+import json
+import os
+import re
+import sys
+
+
+def read_table(path):
+    """{case: (selected, pass)} in the table's order."""
+    rows = {}
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    header = None
+    for line in lines:
+        if not line.startswith("| "):
+            if header is not None and rows:
+                break
+            continue
+        cols = [c.strip() for c in line.strip().strip("|").split("|")]
+        if header is None:
+            header = cols
+            continue
+        if set(cols[0]) <= set("-"):
+            continue
+        rec = dict(zip(header, cols))
+        if "case" not in rec or "pass" not in rec:
+            raise ValueError("%s: not a cases table (no case or pass column)" % path)
+        rows[rec["case"]] = (rec.get("selected", ""), rec["pass"].strip("*") == "yes",
+                             rec.get("injected", ""))
+    if not rows:
+        raise ValueError("%s: no cases table" % path)
+    return rows
+
+
+def json_name(case):
+    """The file diagnose_gap --cases writes a case's gap.json to: every other byte of its name
+    than a letter or a digit becomes _."""
+    return "".join(chr(b) if chr(b).isascii() and chr(b).isalnum() else "_"
+                   for b in case.encode("utf-8")) + ".json"
+
+
+def injected_sizes(text):
+    """{effect: (param, value)} of the one-parameter effects injected in every cell."""
+    out = {}
+    for name, params in re.findall(r"(\w+) \(([^)]*)\)", text):
+        parts = [p.strip() for p in params.split(",")]
+        if len(parts) != 1:
+            continue  # two parameters, or a light only
+        kv = parts[0].split()
+        if len(kv) == 2:
+            try:
+                out[name] = (kv[0], float(kv[1]))
+            except ValueError:
+                pass
+    return out
+
+
+def coverage(path, case, injected):
+    """[(holds, fit_holds)] for the case's selected effects that were injected."""
+    json_path = os.path.join(os.path.dirname(path), "cases", json_name(case))
+    if not os.path.exists(json_path):
+        return []
+    with open(json_path, encoding="utf-8") as f:
+        gap = json.load(f)
+    out = []
+    for sel in gap.get("selected") or []:
+        if sel.get("name") not in injected or sel.get("scope") != "shared":
+            continue
+        param, truth = injected[sel["name"]]
+        ci = (sel.get("ci95") or {}).get(param)
+        if not ci or None in ci:
+            continue
+        fit = (sel.get("over_folds") or {}).get("ci95_fit") or ci
+        out.append((ci[0] <= truth <= ci[1], fit[0] <= truth <= fit[1]))
+    return out
+
+
+def main(argv):
+    if len(argv) < 2 or argv[1] in ("-h", "--help"):
+        print(__doc__.strip())
+        return 0 if len(argv) >= 2 else 2
+    runs = []
+    for i, path in enumerate(argv[1:], 1):
+        m = re.search(r"seed-(\d+)", path)
+        try:
+            runs.append((int(m.group(1)) if m else i, read_table(path)))
+        except (OSError, ValueError) as e:
+            print("gap_cases_seeds: %s" % e, file=sys.stderr)
+            return 2
+    cases = list(runs[0][1])
+    for _, table in runs[1:]:
+        cases += [c for c in table if c not in cases]
+    n = len(runs)
+    print("| case | passes | seeds passing | selected, seed by seed |")
+    print("|---|---|---|---|")
+    total = 0
+    for case in cases:
+        passing = [str(s) for s, t in runs if case in t and t[case][1]]
+        total += len(passing) if not case.startswith("no effect") else 0
+        selected = "; ".join("%d: %s" % (s, t[case][0]) if case in t else "%d: -" % s
+                             for s, t in runs)
+        print("| %s | %d of %d | %s | %s |" % (case, len(passing), n, ", ".join(passing) or "-",
+                                             selected))
+    with_effect = [c for c in cases if not c.startswith("no effect")]
+    print()
+    print("Cases with an effect or outside it: %d passes of %d (%d cases x %d seeds)."
+          % (total, len(with_effect) * n, len(with_effect), n))
+    held = []
+    for (seed, table), path in zip(runs, argv[1:]):
+        for case, (_, _, injected) in table.items():
+            held += coverage(path, case, injected_sizes(injected))
+    if held:
+        print("95 %% intervals of selected, injected effects that hold the injected size: "
+              "%d of %d (the fit's own: %d of %d)."
+              % (sum(h for h, _ in held), len(held), sum(f for _, f in held), len(held)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
