@@ -7,6 +7,8 @@
 # the machine's load is printed (a shared machine gives less than its cores).
 # Usage: scripts/bench_diagnose_gap.sh [BUILD_DIR]   (REPEAT=3 OUT_DIR=/tmp/...)
 set -euo pipefail
+# A command failing inside $(...) would end the script without a word under set -e: say which.
+trap 'echo "bench_diagnose_gap: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 cd "$(dirname "$0")/.."
 BUILD_DIR=${1:-${BUILD_DIR:-build}}
 APP="$BUILD_DIR/apps/diagnose_gap"
@@ -19,8 +21,6 @@ OUT_DIR=${OUT_DIR:-$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)}
 trap 'rm -rf "$OUT_DIR"' EXIT
 REAL=config/data/paper_d455_outdoor.csv
 
-# A command failing inside $(...) would end the script without a word under set -e: say which.
-trap 'echo "bench_diagnose_gap: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 timed() {  # prints "wall_s cpu_s"
   /usr/bin/time -f "%e %U %S" -o "$OUT_DIR/time.txt" "$@" > /dev/null ||
     { echo "bench_diagnose_gap: $* failed" >&2; return 1; }

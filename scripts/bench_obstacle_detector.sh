@@ -13,6 +13,8 @@
 # bushes, a hedge; High Density, emitter on), FRAMES frames. Target: >= 30 frames/s.
 # Usage: bash scripts/bench_obstacle_detector.sh   (BUILD_DIR=build FRAMES=150 REPEAT=3 CORE=0)
 set -euo pipefail
+# A command failing inside $(...) would end the script without a word under set -e: say which.
+trap 'echo "bench_obstacle_detector: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 cd "$(dirname "$0")/.."
 BIN=${BUILD_DIR:-build}/apps
 FRAMES=${FRAMES:-150}
@@ -58,8 +60,6 @@ sensor.close()
 print(len(done))
 PY
 
-# A command failing inside $(...) would end the script without a word under set -e: say which.
-trap 'echo "bench_obstacle_detector: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 best() { sort -g | head -1; }
 # Wall seconds of a command pinned to one core (the whole process).
 timed() {

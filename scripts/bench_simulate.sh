@@ -9,6 +9,8 @@
 #     with the default threads (all cores) and with one thread; the whole process timed.
 # Usage: scripts/bench_simulate.sh [BUILD_DIR]   (OUT_DIR=/tmp/... FRAMES=30 REPEAT=3)
 set -euo pipefail
+# A command failing inside $(...) would end the script without a word under set -e: say which.
+trap 'echo "bench_simulate: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 cd "$(dirname "$0")/.."
 BUILD_DIR=${1:-${BUILD_DIR:-build}}
 SIM="$BUILD_DIR/apps/simulate"
@@ -23,8 +25,6 @@ cat > "$OUT_DIR/protocol.yaml" <<YAML
 protocol: {lights: [daylight], presets: [HA], emitters: ["off"], frames: $FRAMES}
 YAML
 
-# A command failing inside $(...) would end the script without a word under set -e: say which.
-trap 'echo "bench_simulate: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 best() { sort -g | head -1; }
 # Runs a command under /usr/bin/time; prints "wall_s cpu_s" (cpu = user + system).
 timed() {

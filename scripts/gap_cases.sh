@@ -62,8 +62,7 @@ fi
 [ -n "$OUT_DIR" ] || { echo "gap_cases: --seeds needs OUT_DIR" >&2; exit 2; }
 TABLES=()
 for ((s = 1; s <= SEEDS; s++)); do
-  SEED_OPTS=()
-  for o in "${OPTS[@]}"; do SEED_OPTS+=("$o"); done
+  SEED_OPTS=("${OPTS[@]}")
   # The --out pair is the seed's own folder.
   for i in "${!SEED_OPTS[@]}"; do
     if [ "${SEED_OPTS[$i]}" = "--out" ]; then SEED_OPTS[$((i + 1))]="$OUT_DIR/seed-$s"; fi
