@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/hash.h"
 #include "detect/stages.h"
 
 namespace depthbias::detect {
@@ -9,11 +10,7 @@ namespace {
 
 constexpr std::uint64_t kEmpty = ~0ULL;
 
-inline std::uint64_t Mix64(std::uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
+using common::Mix64;
 
 }  // namespace
 

@@ -8,30 +8,18 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/hash.h"
 #include "gap/report.h"
 
 namespace depthbias::gap {
 namespace {
 
+using common::NormalOf;
+
 std::string Num(double v, int digits = 3) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v);
   return buf;
-}
-
-std::uint64_t Mix64(std::uint64_t z) {  // SplitMix64's output function
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-// A standard normal draw fixed by (seed, key): Box–Muller on two hashed uniforms.
-double NormalOf(std::uint64_t seed, const std::string& key) {
-  std::uint64_t h = Mix64(seed + 0x9e3779b97f4a7c15ull);
-  for (unsigned char ch : key) h = Mix64(h ^ ch);
-  const double u1 = (static_cast<double>(Mix64(h + 1) >> 11) + 0.5) / 9007199254740992.0;
-  const double u2 = (static_cast<double>(Mix64(h + 2) >> 11) + 0.5) / 9007199254740992.0;
-  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
 }
 
 std::string PointKey(const std::string& light, double distance_m, double angle_deg) {

@@ -1,5 +1,6 @@
 #include "sim/stereo_sim.h"
 
+#include "common/hash.h"
 #include "common/parallel.h"
 
 #include <algorithm>
@@ -20,12 +21,7 @@ constexpr int kValidBits = 12;  // bits of the hole draw: p resolved to 1/4096
 constexpr int kMixBits = 8;     // bits of the edge-mixing fraction
 constexpr std::uint64_t kGolden = 0x9E3779B97F4A7C15ULL;
 
-// SplitMix64's output function: a counter-based generator, h(seed + i·γ) for draw i.
-inline std::uint64_t Mix64(std::uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
+using common::Mix64;  // a counter-based generator: h(seed + i·γ) for draw i
 
 // Runs f(v_begin, v_end) over [0, rows) split into `threads` bands of rows.
 template <typename F>
