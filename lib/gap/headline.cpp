@@ -158,12 +158,22 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
   const PlacementEstimate& pe = r.placement;
   const int kk = static_cast<int>(r.metric_names.size());
   o << "## Noise, placement and the emitter\n\n"
-    << "The gap is measured against two variances: the replicate noise σ (emitter on/off twins "
-    << "of one placement, with the emitter mismatch removed per scenario and distance) and the "
+    << "The gap is measured against three variances: the replicate noise σ (emitter on/off twins "
+    << "of one placement, with the emitter mismatch removed per scenario and distance), the "
+    << "simulation's own scatter σ_sim (the base simulated again with every panel moved sideways "
+    << "by less than a pixel: the metrics the region's window decides move by steps), and the "
     << "placement scatter τ of a test point (light, distance, angle), which all its recordings "
     << "share: a random effect, its law in distance estimated by REML about main effects and "
     << "two-factor interactions of light, distance, angle, preset and emitter. z = "
-    << "(real − sim) / √(σ² + τ²); the fits whiten the recordings of one test point together.\n\n";
+    << "(real − sim) / √(σ² + σ_sim² + τ²); the fits whiten the recordings of one test point "
+    << "together.\n\n";
+  if (!r.noise.simulation.empty()) {
+    o << "| metric | σ at 10 m | σ_sim at 10 m |\n|---|---|---|\n";
+    for (int k = 0; k < kk; ++k)
+      o << "| " << r.metric_names[k] << " | " << Num(r.noise.scale[k]) << " | "
+        << Num(r.noise.simulation[k]) << " |\n";
+    o << "\n";
+  }
   if (!pe.empty()) {
     o << "| metric | law | τ at 4 m | τ at 8 m | τ at 12 m | τ at 16 m | test points used | "
          "beyond the law |\n|---|---|---|---|---|---|---|---|\n";

@@ -25,7 +25,8 @@ double NoiseEstimate::Of(const Design& d, const Simulations& s, int cell, int k)
   const double q = QuantizationRms(d.metrics[k], z, s.sensor.focal_px(), s.sensor.baseline_m,
                                    s.sensor.subpixel_step_px,
                                    s.base[static_cast<size_t>(cell) * d.num_metrics() + k]);
-  return std::sqrt(a * a + q * q);
+  const double b = simulation.empty() ? 0.0 : simulation[k] * NoiseShape(d.metrics[k], z);
+  return std::sqrt(a * a + b * b + q * q);
 }
 
 NoiseEstimate EstimateNoise(const Design& d, const Simulations& s,
@@ -103,6 +104,18 @@ NoiseEstimate EstimateNoise(const Design& d, const Simulations& s,
       n.method[k] += " + floor";
     }
     n.scale[k] = scale;
+    if (!s.shifted.empty()) {
+      double ss = 0;
+      int count_shifted = 0;
+      for (int c = 0; c < d.num_cells(); ++c) {
+        const double e = s.shifted[obs(c)] - s.base[obs(c)];
+        if (!used(c) || !std::isfinite(e)) continue;
+        ss += std::pow(e / NoiseShape(m, s.depth_m[c]), 2);
+        ++count_shifted;
+      }
+      n.simulation.resize(kk, 0.0);
+      n.simulation[k] = count_shifted > 0 ? std::sqrt(ss / count_shifted / 2) : 0.0;
+    }
   }
   return n;
 }

@@ -12,6 +12,15 @@
 // whose difference has the variance of a residual whose real side is as noisy as the model.
 // Placement and session error, which the twins share, is a variance component of its own
 // (placement.h).
+//
+// The simulation's own scatter is a third: the base is one draw of the noise and of where the
+// panel's outline falls on the pixel grid, and so is every candidate's departure from it. The
+// metrics the region's window decides (mean − median, width, tilt) move by steps as pixels enter
+// or leave it, and a fit that took the simulation as exact would follow those steps as if they
+// were an effect. Its size: the base simulated again with each panel moved sideways by less
+// than a pixel (Simulations::shifted), the root mean square of the difference over √2 (one
+// draw's), in the metric's noise shape. It adds to the replicate noise in quadrature. With
+// simulated replicates (whose difference already holds the simulation's noise) it errs wide.
 
 #include <string>
 #include <vector>
@@ -40,9 +49,12 @@ struct NoiseEstimate {
   std::vector<int> pairs;           // differences it was estimated from
   std::vector<std::string> method;  // "replicates", "simulated replicates"; "+ floor" if raised
   std::vector<EmitterGap> emitter;  // every group of twins and metric (replicates only)
+  std::vector<double> simulation;   // per compared metric: the simulation's own scatter at 10 m
+                                    // (empty: no shifted base)
 
-  // Noise of one observation (cell, compared metric k): the scale times the shape, and the
-  // metric's quantization in quadrature (design.h).
+  // Noise of one observation (cell, compared metric k): the scale times the shape, the
+  // simulation's own scatter times the shape, and the metric's quantization (design.h), in
+  // quadrature.
   double Of(const Design& design, const Simulations& sims, int cell, int k) const;
 };
 

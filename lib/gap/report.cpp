@@ -84,6 +84,12 @@ void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
     w.String("method", r.noise.method[k]).Integer("pairs", r.noise.pairs[k]).EndObject();
   }
   w.EndObject();
+  // The simulation's own scatter (noise.h): the base against itself with the panels moved
+  // sideways by less than a pixel.
+  w.BeginObject("simulation");
+  for (size_t k = 0; k < r.noise.simulation.size(); ++k)
+    w.BeginObject(r.metric_names[k]).Number("at_10m", r.noise.simulation[k]).EndObject();
+  w.EndObject();
   w.BeginObject("placement");
   if (!pe.empty()) {
     w.String("unit", "test point (light, distance, angle)").Integer("test_points", pe.num_points);

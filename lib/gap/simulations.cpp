@@ -6,6 +6,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "common/hash.h"
+
 namespace depthbias::gap {
 namespace {
 
@@ -59,6 +61,7 @@ bool SimulateOptions::IsValid(std::string* why) const {
   if (!(region_margin_px >= 0)) return fail("region_margin_px must be >= 0");
   if (!(step_log_sigma > 0 && step_log_sigma < 1) || !(step_logit_p > 0 && step_logit_p < 3))
     return fail("nuisance steps must be in (0, 1) (log σ_d) and (0, 3) (logit p)");
+  if (!(shift_px >= 0 && shift_px <= 10)) return fail("shift_px must be in [0, 10]");
   return true;
 }
 
@@ -154,6 +157,17 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
     sim::SimParams other = base;
     other.seed = base.seed + 1;
     s.replica = run(other);
+  }
+  if (options.shift_px > 0) {
+    // A fraction of a pixel sideways changes no law of the camera's (0.07° of angle at most),
+    // but which pixels see the panel's edges and which noise falls on it.
+    Design shifted = d;
+    const double px_deg = 180 / M_PI / base.sensor.focal_px();
+    for (sim::Cell& c : shifted.cells)
+      c.angle_deg += options.shift_px * px_deg *
+                     (2 * common::UniformOf(base.seed, "phase|" + c.name) - 1);
+    ++s.runs;
+    s.shifted = SimulateValues({base}, shifted, options);
   }
 
   for (const Candidate& cand : candidates) {

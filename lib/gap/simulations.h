@@ -21,6 +21,9 @@ struct SimulateOptions {
   double step_log_sigma = 0.1;     // central-difference step on log σ_d
   double step_logit_p = 0.3;       // central-difference step on logit p
   bool replica = false;            // also the base at a second seed (simulated replicates)
+  // The base once more with each panel moved sideways by a draw uniform within ±shift_px pixels
+  // (fixed by the seed and the recording's name): the simulation's own scatter (noise.h); 0: not.
+  double shift_px = 1.0;
 
   bool IsValid(std::string* why) const;
 };
@@ -43,6 +46,7 @@ struct Simulations {
   std::vector<double> jac_log_sigma;    // ∂ metric / ∂ log σ_d of the cell's scenario [obs]
   std::vector<double> jac_logit_p;      // ∂ metric / ∂ logit p of the cell's scenario [obs]
   std::vector<double> replica;          // [obs] the base at seed + 1 (empty unless asked)
+  std::vector<double> shifted;          // [obs] the base, panels moved sideways (shift_px)
   std::vector<Surface> surfaces;        // one per candidate, in the candidates' order
   int runs = 0;                         // simulations of the whole table
 

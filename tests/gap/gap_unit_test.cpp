@@ -168,6 +168,77 @@ TEST(Noise, ReplicatesGiveTheNoiseOfOneResidualAndTheEmitterMismatchApart) {
               std::hypot(n.scale[0] * 1.44, q / std::sqrt(12.0)), 1e-12);
 }
 
+// The simulation's own scatter: the shifted base departs from the base by ±0.03 at 10 m in the
+// median bias (shaped as (Z / 10 m)²), alternating over the cells: its root mean square over √2
+// is one simulated value's scatter, and it adds in quadrature to the replicate noise. Only the
+// cells marked in `train` count: marking the cells whose shift is 0.09 instead gives 0.09/√2.
+TEST(Noise, TheSimulationsOwnScatterAddsInQuadrature) {
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(Table(), &d, &why)) << why;
+  Simulations s;
+  s.metrics = d.metrics;
+  s.base = d.real;
+  s.shifted = d.real;
+  const int kk = d.num_metrics();
+  std::vector<char> train(d.num_cells(), 0);
+  for (int c = 0; c < d.num_cells(); ++c) {
+    s.depth_m.push_back(d.cells[c].distance_m);
+    const double shape = std::pow(d.cells[c].distance_m / 10.0, 2);
+    const bool odd = c % 2 == 1;
+    s.shifted[c * kk] += (odd ? 0.09 : (c % 4 == 0 ? 0.03 : -0.03)) * shape;
+    train[c] = odd;
+  }
+  std::vector<char> even(d.num_cells());
+  for (int c = 0; c < d.num_cells(); ++c) even[c] = !train[c];
+  const NoiseEstimate n = EstimateNoise(d, s, even);
+  ASSERT_EQ(n.simulation.size(), static_cast<size_t>(kk));
+  EXPECT_NEAR(n.simulation[0], 0.03 / std::sqrt(2.0), 1e-12);
+  EXPECT_EQ(n.simulation[1], 0.0);  // the other metrics: no shift
+  EXPECT_NEAR(EstimateNoise(d, s, train).simulation[0], 0.09 / std::sqrt(2.0), 1e-12);
+  int far = 0;
+  while (d.cells[far].distance_m != 12) ++far;
+  NoiseEstimate without = n;
+  without.simulation.clear();
+  EXPECT_NEAR(n.Of(d, s, far, 0),
+              std::hypot(without.Of(d, s, far, 0), 0.03 / std::sqrt(2.0) * 1.44), 1e-12);
+}
+
+// The shifted base moves each panel sideways by less than a pixel: the median, which no window
+// decides, stays within two steps of its quantization at 35° off axis (ten pixels move it
+// 17 mm at 4 m, past the 11 mm of two steps); with shift_px 0 there is no such run.
+TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
+  sim::SimParams p;
+  p.sensor.fallback = {"", "", 0.08, 0.2};
+  p.seed = 11;
+  std::vector<records::PanelMetrics> rows;
+  for (double dist : {4.0, 16.0})
+    for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, 35, "HA", emitter));
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  SimulateOptions options;
+  options.frames = 4;
+  const Simulations s = SimulateDesign(p, d, {}, options);
+  ASSERT_EQ(s.shifted.size(), s.base.size());
+  EXPECT_EQ(s.runs, 6);  // base, two Jacobians (± each), shifted
+  const int kk = d.num_metrics();
+  bool any_moved = false;
+  for (int c = 0; c < d.num_cells(); ++c) {
+    const double z = s.depth_m[c];
+    const double step = z * z * p.sensor.subpixel_step_px / (p.sensor.focal_px() * p.sensor.baseline_m);
+    EXPECT_LE(std::fabs(s.shifted[c * kk] - s.base[c * kk]), 2 * step + 1e-9) << d.cells[c].name;
+    for (int k = 0; k < kk; ++k) any_moved = any_moved || s.shifted[c * kk + k] != s.base[c * kk + k];
+  }
+  EXPECT_TRUE(any_moved);
+  options.shift_px = 0;
+  const Simulations none = SimulateDesign(p, d, {}, options);
+  EXPECT_TRUE(none.shifted.empty());
+  EXPECT_EQ(none.runs, 5);
+  options.shift_px = -1;
+  EXPECT_THROW(SimulateDesign(p, d, {}, options), std::invalid_argument);
+}
+
 // A simulation that reads every metric but the median bias as the real one (and the median bias
 // as 0): the median bias is the only gap.
 Simulations MedianBiasOnly(const Design& d) {

@@ -3,14 +3,15 @@
 // distance, effects withheld from the base model, judged by the strict criteria on the gap.json
 // the diagnosis writes. scripts/gap_cases.sh prints every case with pass yes/no
 // (docs/gap/cases.md); this binary asserts the criteria themselves (each broken on purpose),
-// how the tables are made, and that seven of the cases passing at seed 1 and five null tables
-// keep passing.
+// how the tables are made, and that six of the cases passing at four or five seeds of five keep
+// passing at two of them, with five null tables.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <vector>
@@ -336,7 +337,9 @@ void ExpectIntervalOverFolds(const std::string& json, bool widened) {
   double mean = 0, ss = 0;
   for (double v : sizes) mean += v / 4;
   for (double v : sizes) ss += (v - mean) * (v - mean);
-  EXPECT_NEAR(se[0], std::sqrt(0.75 * ss), 1e-4 * std::max(se[0], 1e-3));
+  // gap.json prints six significant digits: the sizes' rounding (about 1e-6 of the size) bounds
+  // how closely se can be recomputed from them.
+  EXPECT_NEAR(se[0], std::sqrt(0.75 * ss), 1e-4 * se[0] + 1e-5 * std::fabs(x[0]));
   const double tol = 1e-4 * std::max(std::fabs(x[0]), 1e-3);
   EXPECT_LE(ci[0], fit[0] + tol);
   EXPECT_GE(ci[1], fit[1] - tol);
@@ -349,46 +352,56 @@ void ExpectIntervalOverFolds(const std::string& json, bool widened) {
   }
 }
 
-// Seven of the cases that pass at seed 1 (docs/gap/cases.md), among them one where an extra
-// effect rode beside the right one until each had to carry its own part (--min-own-shrink:
-// panel_tilt small) and two outside the registry (a test point read far; a far over-read from
-// 12 m on, which the median's rest names as a step from 12 m where the laws over the whole
-// table named "every recording ∝ D²"); run as scripts/gap_cases.sh runs them
-// (the tables at seed 1000 + index, the diagnosis at seed 1, 10 frames a cell), and five of
-// the tables without an effect (seeds 2000–2004): they must keep passing. Beside them, a 6 %
-// depth scale must be named as itself at its size: with the dispersion measured about the
-// calibrated base, the scale's own gap widened the median's φ to 7 and a disparity offset was
-// selected instead (its simulated shrink, 44 %, stays under the 70 % a pass needs: the other
-// metrics' noise floor is part of the gap it is measured on). The whole suite and the other
-// fifteen null tables take about 5 minutes: scripts/gap_cases.sh. The selected effect's
-// interval is checked against its refits without each distance on two of them: depth_scale
-// large, whose refits (0.060, 0.057, 0.069, 0.064) widen it, and radial_disparity_residual
-// small, whose refits agree within the fit's own interval.
-TEST(Cases, ThosePassingAtSeedOneKeepPassing) {
+// Cases that pass at four or five of the seeds 1–5 (docs/gap/cases.md, "Over five seeds"), at
+// two of those seeds, run as scripts/gap_cases.sh runs them (the tables at S + 999 + index, the
+// diagnosis at S, 10 frames a cell): among them one where an extra effect rode beside the right
+// one until each had to carry its own part (--min-own-shrink: panel_tilt small), one the
+// calibration cannot be told from without naming it (invalidation_gain small: "one of", or
+// nothing), and one outside the registry (a far over-read from 12 m on, which the median's rest
+// names as a step from 12 m). A case that passes at two or three seeds of five is not guarded:
+// its outcome at one seed is a draw, not the capability. Five tables without an effect (seeds
+// 2000–2004) must select nothing. Beside them, at seed 1, a 6 % depth scale must be named as
+// itself at its size (its simulated shrink stays under the 70 % a pass needs: the other metrics'
+// noise floor is part of the gap it is measured on). The whole suite and the other fifteen null
+// tables take about 5 minutes a seed: scripts/gap_cases.sh. The selected effect's interval is
+// checked against its refits without each distance on two of them: depth_scale large, whose
+// refits widen it, and radial_disparity_residual small, whose refits agree within the fit's own
+// interval.
+TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
   const sim::SimParams base = Base();
   DiagnoseParams params;
   params.simulate.threads = 2;
   const std::vector<WithheldCase> cases = DefaultWithheldCases();
-  std::vector<int> only;
-  for (const char* name : {"disparity_offset large", "radial_disparity_residual small",
-                           "radial_disparity_residual large", "panel_tilt small",
-                           "range_vs_depth large", "one test point read 1 m far (outside)",
-                           "far over-read of 0.5 m from 12 m on (outside)", "depth_scale large"})
-    for (size_t i = 0; i < cases.size(); ++i)
-      if (cases[i].name == name) only.push_back(static_cast<int>(i));
-  ASSERT_EQ(only.size(), 8u);
+  auto indices = [&](std::initializer_list<const char*> names) {
+    std::vector<int> only;
+    for (const char* name : names)
+      for (size_t i = 0; i < cases.size(); ++i)
+        if (cases[i].name == name) only.push_back(static_cast<int>(i));
+    EXPECT_EQ(only.size(), names.size());
+    return only;
+  };
+  const auto guarded = {"disparity_offset large", "radial_disparity_residual small",
+                        "panel_tilt small", "invalidation_gain small", "temporal_drift large",
+                        "far over-read of 0.5 m from 12 m on (outside)"};
+  for (const std::uint64_t seed : {1, 3}) {
+    sim::SimParams at = base;
+    at.seed = seed;
+    std::vector<int> only = indices(guarded);
+    if (seed == 1) only.push_back(indices({"depth_scale large"}).front());
+    for (const CaseOutcome& o : RunWithheldCases(at, cases, params, seed + 999, only)) {
+      if (seed == 1 && (o.truth.name == "depth_scale large" ||
+                        o.truth.name == "radial_disparity_residual small"))
+        ExpectIntervalOverFolds(o.gap_json, o.truth.name == "depth_scale large");
+      if (o.truth.name == "depth_scale large") {
+        EXPECT_EQ(o.selected, std::vector<std::string>{"depth_scale"}) << o.why;
+        EXPECT_LT(o.max_rel_error, 0.2) << o.why;
+        continue;
+      }
+      EXPECT_TRUE(o.pass) << "seed " << seed << ", " << o.truth.name << ": " << o.why;
+    }
+  }
   sim::SimParams at_one = base;
   at_one.seed = 1;
-  for (const CaseOutcome& o : RunWithheldCases(at_one, cases, params, 1000, only)) {
-    if (o.truth.name == "depth_scale large" || o.truth.name == "radial_disparity_residual small")
-      ExpectIntervalOverFolds(o.gap_json, o.truth.name == "depth_scale large");
-    if (o.truth.name == "depth_scale large") {
-      EXPECT_EQ(o.selected, std::vector<std::string>{"depth_scale"}) << o.why;
-      EXPECT_LT(o.max_rel_error, 0.2) << o.why;
-      continue;
-    }
-    EXPECT_TRUE(o.pass) << o.truth.name << ": " << o.why;
-  }
   const std::vector<CaseOutcome> nulls =
       RunWithheldCases(at_one, NullCases(5), params, 2000);
   for (const CaseOutcome& o : nulls) EXPECT_TRUE(o.pass) << o.truth.name << ": " << o.why;
