@@ -159,7 +159,7 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
     s.replica = run(other);
   }
   if (options.shift_px > 0) {
-    // A fraction of a pixel sideways changes no law of the camera's (0.07° of angle at most),
+    // A fraction of a pixel sideways changes no law of the camera's (0.07° of angle a pixel),
     // but which pixels see the panel's edges and which noise falls on it.
     Design shifted = d;
     const double px_deg = 180 / M_PI / base.sensor.focal_px();
