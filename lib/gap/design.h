@@ -34,6 +34,9 @@ struct MetricInfo {
   // Noise model: scale · (Z / 10 m)^noise_exponent, Z the panel's depth. Disparity noise gives
   // depth errors ∝ Z² (σ_Z = Z²·σ_d/(f·B)); an extent in pixels ∝ Z.
   double noise_exponent;
+  // The placement scatter's shape in Z for metrics other than the median (whose law is
+  // a + b·D, placement.h): scale · (Z / 10 m)^placement_exponent.
+  double placement_exponent;
   double noise_floor;  // smallest noise scale accepted (in the metric's unit, at Z = 10 m)
   bool core;           // the article's four: always compared
   // Quantization the replicates cannot show (two recordings of one panel mostly read the same
@@ -49,6 +52,8 @@ const MetricInfo& InfoOf(int metric);
 double MetricValue(const records::PanelMetrics& row, int metric);
 // Noise shape (Z / 10 m)^exponent of a metric at depth Z.
 double NoiseShape(int metric, double depth_m);
+// Placement scatter shape (Z / 10 m)^placement_exponent of a metric at depth Z.
+double PlacementShape(int metric, double depth_m);
 // RMS quantization of a metric at depth Z with focal f [px], baseline B [m], subpixel step [px];
 // value: the metric's (transformed) value, for kRelativeStep.
 double QuantizationRms(int metric, double depth_m, double focal_px, double baseline_m,

@@ -184,7 +184,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
       o << "| " << r.metric_names[k] << " | "
         << (m == kMedianBias ? Num(pe.a[k], 3) + " m + " + Num(100 * pe.b[k], 3) + " % of D"
                              : Num(pe.a[k], 3) + " " + InfoOf(m).unit + " × (D/10 m)^" +
-                                   Num(InfoOf(m).noise_exponent))
+                                   Num(InfoOf(m).placement_exponent))
         << " |";
       for (double d : {4.0, 8.0, 12.0, 16.0}) o << " " << Num(pe.Law(k, m, d)) << " |";
       o << " " << pe.points_used[k] << " | " << flagged << " |\n";

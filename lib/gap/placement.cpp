@@ -225,7 +225,7 @@ std::vector<int> TestPoints(const Design& d, int* num_points) {
 double PlacementEstimate::Law(int k, int metric, double distance_m) const {
   if (a.empty()) return 0;
   if (metric == kMedianBias) return a[k] + b[k] * distance_m;
-  return a[k] * NoiseShape(metric, distance_m);
+  return a[k] * PlacementShape(metric, distance_m);
 }
 
 PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
@@ -298,7 +298,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       r.s.push_back(s);
       r.w.push_back(w);
       const double dist = pe.point_distance_m[t];
-      r.f0.push_back(metric == kMedianBias ? 1.0 : NoiseShape(metric, dist));
+      r.f0.push_back(metric == kMedianBias ? 1.0 : PlacementShape(metric, dist));
       r.f1.push_back(metric == kMedianBias ? dist : 0.0);
       r.free_tau.push_back(0.0);
       block_point.push_back(t);

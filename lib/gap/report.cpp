@@ -97,6 +97,7 @@ void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
       const int m = r.design.metrics[k];
       w.BeginObject(r.metric_names[k]);
       w.String("law", m == kMedianBias ? "a + b·D [m]" : "a · (D / 10 m)^e");
+      if (m != kMedianBias) w.Number("e", InfoOf(m).placement_exponent);
       w.Number("a", pe.a[k]).Number("b", pe.b[k]).Integer("test_points_used", pe.points_used[k]);
       w.BeginArray("at");
       for (double d : {4.0, 8.0, 12.0, 16.0}) {
@@ -246,7 +247,9 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     const MetricInfo& info = InfoOf(r.design.metrics[k]);
     w.BeginObject().String("name", info.name).String("unit", info.unit);
     w.String("meaning", info.meaning).Number("noise_at_10m", r.noise.scale[k]);
-    w.Number("noise_exponent", info.noise_exponent).String("noise_method", r.noise.method[k]);
+    w.Number("noise_exponent", info.noise_exponent);
+    w.Number("placement_exponent", info.placement_exponent);
+    w.String("noise_method", r.noise.method[k]);
     w.Integer("noise_pairs", r.noise.pairs[k]).Number("dispersion", r.dispersion[k]);
     w.EndObject();
   }
