@@ -13,7 +13,7 @@
 #include "gap/cases.h"
 #include "io/atomic_file.h"
 #include "io/metrics_csv.h"
-#include "sim/config_yaml.h"
+#include "support/article.h"
 #include "support/tools.h"
 
 namespace depthbias {
@@ -153,13 +153,7 @@ TEST(DiagnoseGapInput, MessagesNameWhatIsWrong) {
 // article's) × emitter off and on, is diagnosed from its own cells.
 TEST(DiagnoseGapInput, AUsersUnitOfOneLightAndOnePresetIsDiagnosedOnItsOwnCells) {
   const fs::path d = Dir("unit");
-  sim::SimParams base;
-  std::string why, sensor;
-  const std::string config = DEPTHBIAS_SOURCE_DIR "/config/";
-  ASSERT_TRUE(sim::ParseProtocolYaml(io::ReadFile(config + "protocol_paper.yaml"), &base.protocol,
-                                     &sensor, &why) &&
-              sim::ParseSensorYaml(io::ReadFile(config + sensor), &base.sensor, &why))
-      << why;
+  sim::SimParams base = test_support::ArticleSimParams();
   base.protocol.distances_m = {3, 6, 9, 13};
   base.protocol.angles_deg = {-15, 0, 5, 25};
   gap::WithheldCase unit = gap::NullCases(1)[0];

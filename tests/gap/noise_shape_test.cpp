@@ -17,27 +17,15 @@
 #include "gap/placement.h"
 #include "gap/select.h"
 #include "gap/simulations.h"
-#include "io/atomic_file.h"
-#include "sim/config_yaml.h"
+#include "support/article.h"
 
 namespace depthbias::gap {
 namespace {
 
-sim::SimParams ArticleBase() {
-  sim::SimParams base;
-  std::string why, sensor;
-  const std::string config = DEPTHBIAS_SOURCE_DIR "/config/";
-  if (!sim::ParseProtocolYaml(io::ReadFile(config + "protocol_paper.yaml"), &base.protocol,
-                              &sensor, &why) ||
-      !sim::ParseSensorYaml(io::ReadFile(config + sensor), &base.sensor, &why))
-    throw std::runtime_error(why);
-  return base;
-}
-
 // Mean z² of the base against a table without effect (placed 2 % off, the truth at its own
 // seeds), per metric and distance, pooled over the tables of `seeds`.
 std::map<std::pair<int, double>, double> MeanSquareByDistance(const std::vector<int>& seeds) {
-  const sim::SimParams base = ArticleBase();
+  const sim::SimParams base = test_support::ArticleSimParams();
   SimulateOptions options;
   options.threads = 2;
   std::map<std::pair<int, double>, double> sum, count;

@@ -17,22 +17,12 @@
 #include <vector>
 
 #include "gap/cases.h"
-#include "io/atomic_file.h"
-#include "sim/config_yaml.h"
+#include "support/article.h"
 
 namespace depthbias::gap {
 namespace {
 
-sim::SimParams Base() {
-  sim::SimParams p;
-  std::string why, sensor;
-  const std::string dir = DEPTHBIAS_SOURCE_DIR "/config/";
-  if (!sim::ParseProtocolYaml(io::ReadFile(dir + "protocol_paper.yaml"), &p.protocol, &sensor,
-                              &why) ||
-      !sim::ParseSensorYaml(io::ReadFile(dir + sensor), &p.sensor, &why))
-    throw std::runtime_error("fixture: " + why);
-  return p;
-}
+sim::SimParams Base() { return test_support::ArticleSimParams(); }
 
 
 // Two rows of a table (ids, test points) for the judge.
