@@ -36,6 +36,7 @@ std::vector<Candidate> MakeCandidates() {
   Axis holes = Continuous("gain", {0.25, 0.5, 1, 1.6, 2.6, 4.5, 9}, 1, 2);
   holes.log_scale = true;
   c.push_back({"invalidation_gain", {holes}});
+  c.push_back({"emitter_gain", {Continuous("gain", {0, 0.3, 0.6, 1, 1.6, 2.5, 4}, 1, 0.3)}});
   c.push_back({"panel_tilt",
                {Continuous("yaw_deg", {-40, -25, -14, -6, 0, 6, 14, 25, 40}, 0, 20)}});
   c.push_back({"temporal_drift",

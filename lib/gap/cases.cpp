@@ -115,6 +115,10 @@ std::vector<WithheldCase> DefaultWithheldCases() {
   c.outside.coef = 0.5;
   c.outside.from_distance_m = 12;
   cases.push_back(c);
+  // Added after the far step, so that the cases above keep their tables. Large: the projector
+  // adds nothing (a sunlit pattern, or a renderer without one); small: a fifth less texture.
+  cases.push_back(Registry("emitter_gain", "small", {{"gain", 0.8}}));
+  cases.push_back(Registry("emitter_gain", "large", {{"gain", 0}}));
   return cases;
 }
 
@@ -123,7 +127,9 @@ WithheldCase FieldCampaignCase() {
   c.name = "field bags through panel_extract: daylight HA, 32 rows, disparity_offset -0.25 px";
   c.family = "field";
   c.unit = true;
-  c.injected = {{"disparity_offset", {{"delta_px", -0.25}}, ""}};
+  // The field scenes' emitter only marks the recording: its pattern adds no texture, where the
+  // simulator's adds emitter_texture within its reach (emitter_gain 0 against it).
+  c.injected = {{"disparity_offset", {{"delta_px", -0.25}}, ""}, {"emitter_gain", {{"gain", 0}}, ""}};
   return c;
 }
 

@@ -131,6 +131,7 @@ struct NestedFold {
   // effect (in `selected`'s order) Σz² with that effect left out of the selection minus Σz²
   // with the whole selection (its own simulated gain beside the others; NaN if not simulated).
   double simulated_calibrated_sq = NAN;
+  double simulated_sq = NAN;  // Σz² with the whole selection simulated
   std::vector<double> effect_gain_simulated;
 };
 

@@ -105,6 +105,7 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
       out.zs = Scaled(model, mu);
       const double all_sq = SumSq(out.zs), calibrated_sq = SumSq(out.zsc);
       nf.simulated_calibrated_sq = calibrated_sq;
+      nf.simulated_sq = all_sq;
       // Each effect's own part: the selection simulated without it, the others at their values.
       for (size_t j = 0; j < sel.current.terms.size(); ++j) {
         double without_sq = calibrated_sq;

@@ -147,6 +147,7 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
     w.Number("deviance_calibrated", f.deviance_calibrated);
     w.Number("deviance_selected", f.deviance_selected).Bool("simulated", f.simulated);
     w.Number("simulated_calibrated_sq", f.simulated_calibrated_sq);
+    w.Number("simulated_sq", f.simulated_sq);
     w.BeginArray("effect_gain_simulated");
     for (double g : f.effect_gain_simulated) w.Number(g);
     w.EndArray();

@@ -77,6 +77,17 @@ std::vector<EffectInfo> MakeRegistry() {
                [](const std::map<std::string, double>& p, Departures* d) {
                  d->invalid_odds_gain *= p.at("gain");
                }});
+  r.push_back({"emitter_gain",
+               "the projector's pattern adds more or less texture than the base model: its power, "
+               "the ambient infrared that washes it out (sunlight), the surface's reflectance "
+               "in the near infrared",
+               "emitter-on recordings only: the texture the emitter adds, e·t_e·min(1, (R_e/Z)²), "
+               "so valid_pct moves most at short range (R_e the emitter's reach) and not at all "
+               "with the emitter off; depths unchanged; e = 0: the projector adds nothing",
+               {{"gain", 0.5, 0.0, 10.0, "1", "factor e on the emitter's texture"}},
+               [](const std::map<std::string, double>& p, Departures* d) {
+                 d->emitter_gain *= p.at("gain");
+               }});
   r.push_back({"panel_tilt",
                "the panel is not parallel to the image plane: turned about the vertical",
                "normal_tilt_deg ≈ yaw; the depths spread across the panel (Z varies by "

@@ -19,6 +19,7 @@ struct Departures {
   // Sensor.
   double sigma_gain = 1.0;         // multiplies σ_d
   double invalid_odds_gain = 1.0;  // multiplies the odds p/(1 − p) of a hole
+  double emitter_gain = 1.0;       // multiplies the texture the emitter's pattern adds
   double depth_scale = 1.0;        // multiplies every reported depth
   double edge_mix_width_px = 0.0;  // pixels this near a depth edge mix with its other side
   double edge_mix_strength = 0.0;  // largest mixing fraction, drawn uniformly per pixel and frame

@@ -417,7 +417,7 @@ void StereoSim::Build() {
         double t = texture[i];
         if (cell_.emitter_on) {
           const double reach = s.emitter_reach_m / true_depth_m_[i];
-          t += s.emitter_texture * std::min(1.0, reach * reach);
+          t += dep.emitter_gain * s.emitter_texture * std::min(1.0, reach * reach);
         }
         if (t != last_texture) {  // surfaces share textures: the logistic once per change
           last_texture = t;

@@ -591,5 +591,35 @@ TEST(RegionSpill, SignatureInTheMetrics) {
   EXPECT_EQ(with(4.7, 1.8).region_px, spill.region_px);
 }
 
+// emitter_gain scales the texture the projector adds: with the emitter off a recording is the
+// same to the bit whatever the gain; with it on at 4 m (within its reach) a gain of 0 gives the
+// emitter-off valid share, and a larger gain more valid pixels; the depths do not move.
+TEST(EmitterGain, SignatureInTheMetrics) {
+  sim::SimParams p;
+  p.sensor.fallback = {"", "", 0.08, 0.6};
+  p.seed = 9;
+  sim::MetricsParams mp;
+  mp.frames = 5;
+  auto at = [&](double gain, bool on) {
+    sim::Cell c;
+    c.distance_m = 4;
+    c.emitter_on = on;
+    c.name = sim::CellName(c);
+    sim::SimParams q = p;
+    std::string why;
+    EXPECT_TRUE(sim::BuildDepartures({{"emitter_gain", {{"gain", gain}}}}, &q.departures, &why))
+        << why;
+    return sim::SimulateMetrics(q, c, mp).metrics;
+  };
+  const auto off = at(1, false), off_zero = at(0, false);
+  EXPECT_DOUBLE_EQ(off_zero.valid_pct, off.valid_pct);
+  EXPECT_DOUBLE_EQ(off_zero.median_m, off.median_m);
+  const auto on = at(1, true), on_zero = at(0, true), on_three = at(3, true);
+  EXPECT_GT(on.valid_pct, off.valid_pct + 3) << "the configured emitter adds valid pixels at 4 m";
+  EXPECT_NEAR(on_zero.valid_pct, off.valid_pct, 2.0);  // another seed's draw: within noise
+  EXPECT_GT(on_three.valid_pct, on.valid_pct + 3);
+  EXPECT_NEAR(on_three.median_m, on.median_m, 0.01);
+}
+
 }  // namespace
 }  // namespace depthbias::gap

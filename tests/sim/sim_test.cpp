@@ -345,7 +345,7 @@ TEST(Effects, RegistryRefusesUnknownNamesParametersAndBounds) {
     EXPECT_FALSE(e.params.empty()) << e.name;
     EXPECT_TRUE(BuildDepartures({{e.name, {}}}, &d, &why)) << e.name << ": " << why;
   }
-  EXPECT_EQ(EffectRegistry().size(), 10u);
+  EXPECT_EQ(EffectRegistry().size(), 11u);
 }
 
 TEST(StereoSim, RefusesInvalidParameters) {
