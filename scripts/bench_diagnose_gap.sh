@@ -44,7 +44,9 @@ swall=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f1 | best)
 scpu=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f2 | best)
 echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
 printf '%-58s %9s %9s %s\n' "case (best of $REPEAT)" "wall [s]" "CPU [s]" "target"
-printf '%-58s %9s %9s %s\n' "diagnose_gap, 128 rows, 10 candidates, nested LODO ($n_sims sims)" \
+n_cand=$(python3 -c 'import json, sys; print(len(json.load(open(sys.argv[1]))["settings"]["candidates"]))' \
+  "$OUT_DIR/out/gap.json" 2>/dev/null || echo "?")
+printf '%-58s %9s %9s %s\n' "diagnose_gap, 128 rows, $n_cand candidates, nested LODO ($n_sims sims)" \
   "$wall" "$cpu" "≤ 30 s wall on 2 cores (aim 10 s)"
 printf '%-58s %9s %9s %s\n' "peer: simulate --metrics-only, 128 cells x 10 frames" \
   "$swall" "$scpu" "one of the $n_sims"

@@ -61,7 +61,10 @@ struct TermFit {
   std::vector<std::vector<double>> values;  // [group][axis], natural units
   std::vector<std::vector<double>> ci_lo;   // 95 % interval [group][axis] (discrete: the value)
   std::vector<std::vector<double>> ci_hi;
-  std::vector<std::vector<char>> at_bound;  // the value sits on the grid's edge
+  // The value sits on the grid's edge short of the parameter's own bound (where the data would
+  // take it further than was simulated: not determined). At a bound of the registry's (a gain
+  // of 0, a weight of 1) the value is the bound: determined, its interval clipped to it.
+  std::vector<std::vector<char>> at_bound;
   std::vector<char> group_used;             // the group had cells in the fit (else: mean)
 };
 
