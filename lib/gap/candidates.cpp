@@ -48,6 +48,11 @@ std::vector<Candidate> MakeCandidates() {
   spill.discrete = true;
   c.push_back({"region_spill",
                {spill, Continuous("background_rel", {1.3, 1.7, 2.2, 2.8, 3.6}, NAN, 2.2)}});
+  for (Candidate& cand : c)
+    if (const sim::EffectInfo* info = sim::FindEffect(cand.effect))
+      for (Axis& a : cand.axes)
+        for (const auto& p : info->params)
+          if (p.name == a.param) a.min_value = p.min_value, a.max_value = p.max_value;
   return c;
 }
 

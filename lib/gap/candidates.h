@@ -4,6 +4,7 @@
 // grid nodes are interpolated (monotone cubic, per cell and metric): the fits then never call
 // the simulator, and one set of simulations serves every fit, fold and combination.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,9 @@ struct Axis {
   bool discrete = false;   // the simulator uses whole node values only (a width in pixels)
   bool log_scale = false;  // interpolated in log(value) (gains)
   double reference = 0.0;  // a size typical of the effect, for its signature
+  // The registry's bounds of the parameter: a grid edge at one of them is the value itself, not
+  // a sign that the data reach beyond what was simulated.
+  double min_value = -INFINITY, max_value = INFINITY;
 };
 
 struct Candidate {

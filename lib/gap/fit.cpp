@@ -560,15 +560,11 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
                                    : model.FromCoord(cand_index, ax, x + 1.96 * s));
         const double tol = 1e-6 * (nodes.back() - nodes.front());
         const Axis& axis = cand.axes[a];
-        double lo = -INFINITY, hi = INFINITY;  // the registry's bounds of the parameter
-        if (const sim::EffectInfo* info = sim::FindEffect(cand.effect))
-          for (const auto& p : info->params)
-            if (p.name == axis.param) lo = p.min_value, hi = p.max_value;
-        const bool low = x <= nodes.front() + tol && axis.nodes.front() > lo;
-        const bool high = x >= nodes.back() - tol && axis.nodes.back() < hi;
+        const bool low = x <= nodes.front() + tol && axis.nodes.front() > axis.min_value;
+        const bool high = x >= nodes.back() - tol && axis.nodes.back() < axis.max_value;
         tf.at_bound[g].push_back(!disc && group_used[t][g] && (low || high));
-        tf.ci_lo[g].back() = std::max(tf.ci_lo[g].back(), lo);
-        tf.ci_hi[g].back() = std::min(tf.ci_hi[g].back(), hi);
+        tf.ci_lo[g].back() = std::max(tf.ci_lo[g].back(), axis.min_value);
+        tf.ci_hi[g].back() = std::min(tf.ci_hi[g].back(), axis.max_value);
       }
       if (group_used[t][g]) fit.num_params += static_cast<int>(cand.axes.size());
     }

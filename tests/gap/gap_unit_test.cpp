@@ -548,6 +548,14 @@ TEST(Candidates, EveryRegisteredEffectHasAValidGrid) {
 // region_spill: the region reaches w whole pixels past the panel's outline onto a background at
 // r times the panel's depth. Its signature: more pixels, a far tail (mean − median), a wider
 // panel; none at w = 0; and the whole spill inside the rendered window up to its 5 px bound.
+// p with one registered effect added.
+sim::SimParams WithEffect(const sim::SimParams& p, const sim::EffectSpec& effect) {
+  sim::SimParams q = p;
+  std::string why;
+  EXPECT_TRUE(sim::BuildDepartures({effect}, &q.departures, &why)) << why;
+  return q;
+}
+
 TEST(RegionSpill, SignatureInTheMetrics) {
   sim::SimParams p;
   p.sensor.fallback = {"", "", 0.08, 0.2};
@@ -560,12 +568,8 @@ TEST(RegionSpill, SignatureInTheMetrics) {
   sim::MetricsParams mp;
   mp.frames = 5;
   auto with = [&](double w, double r) {
-    sim::SimParams q = p;
-    std::string why;
-    EXPECT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", w}, {"background_rel", r}}}},
-                                     &q.departures, &why))
-        << why;
-    return sim::SimulateMetrics(q, c, mp);
+    return sim::SimulateMetrics(
+        WithEffect(p, {"region_spill", {{"width_px", w}, {"background_rel", r}}}), c, mp);
   };
   const auto base = sim::SimulateMetrics(p, c, mp);
   const auto none = with(0, 2);
@@ -579,10 +583,8 @@ TEST(RegionSpill, SignatureInTheMetrics) {
   EXPECT_GT(spill.metrics.panel_width_m, base.metrics.panel_width_m + 0.2);
   EXPECT_GT(spill.metrics.plane_std_m, base.metrics.plane_std_m);
   // The 5 px bound: the metrics-only window holds the whole region (same as a full frame's).
-  sim::SimParams q = p;
-  std::string why;
-  ASSERT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", 5}, {"background_rel", 2}}}},
-                                   &q.departures, &why));
+  const sim::SimParams q =
+      WithEffect(p, {"region_spill", {{"width_px", 5}, {"background_rel", 2}}});
   const auto windowed = sim::SimulateMetrics(q, c, mp);
   const sim::StereoSim full(q, c);
   EXPECT_EQ(static_cast<size_t>(windowed.region_px),
@@ -605,11 +607,7 @@ TEST(EmitterGain, SignatureInTheMetrics) {
     c.distance_m = 4;
     c.emitter_on = on;
     c.name = sim::CellName(c);
-    sim::SimParams q = p;
-    std::string why;
-    EXPECT_TRUE(sim::BuildDepartures({{"emitter_gain", {{"gain", gain}}}}, &q.departures, &why))
-        << why;
-    return sim::SimulateMetrics(q, c, mp).metrics;
+    return sim::SimulateMetrics(WithEffect(p, {"emitter_gain", {{"gain", gain}}}), c, mp).metrics;
   };
   const auto off = at(1, false), off_zero = at(0, false);
   EXPECT_DOUBLE_EQ(off_zero.valid_pct, off.valid_pct);
