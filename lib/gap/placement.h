@@ -53,14 +53,27 @@ struct PlacementEstimate {
   // Per compared metric k: the law τ_k(D) = a_k·f(D) + b_k·D, f = 1 for the median bias,
   // (D / 10 m)^e for the others (b = 0).
   std::vector<double> a, b;
+  // The floor of a spread's scatter. A panel standing u off along its line of sight moves the
+  // log of a spread (plane_std, temporal_std: ∝ Z² for a free spread) by s·u, s its sensitivity
+  // measured on the simulation (Simulations::moved: the base with every panel placed further
+  // by a known share of its distance; mean over the cells at that distance), so their scatter
+  // is at least |s(D)|·τ_median(D). Their own REML reads 0.014–0.045 where panels placed 2 % off
+  // give 0.04, and 0 on some tables without effect (z to −26 at 4 m on one with the dithered
+  // lattices). The sensitivity, not 2/Z: in the region the window draws, plane_std grows
+  // slower than Z² beyond 12 m (at 17.1 m it is 1.02 times its 16 m value, Z² says 1.14).
+  std::vector<int> floor_of;                  // [k] the median's index, −1: no floor
+  std::vector<double> floor_distance_m;       // the distances the sensitivity is known at
+  std::vector<std::vector<double>> sensitivity;  // [k][distance] per metre
   std::vector<int> points_used;           // [k] test points the law was estimated from
   std::vector<std::vector<double>> departure;    // [k][point] mean residual about X·β
   std::vector<std::vector<double>> departure_z;  // [k][point] over its sd under the law
   std::vector<std::vector<char>> flagged;        // [k][point] beyond the law (Bonferroni)
   std::vector<std::vector<double>> tau;          // [k][point] scatter used in the covariance
 
-  // The law at distance D for compared metric k (metric: its Metric value).
+  // The law at distance D for compared metric k (metric: its Metric value), its floor included.
   double Law(int k, int metric, double distance_m) const;
+  // The floor of compared metric k's scatter at distance D (0: none).
+  double Floor(int k, double distance_m) const;
   double Tau(int k, int cell) const {
     return tau.empty() ? 0.0 : tau[k][point[cell]];
   }

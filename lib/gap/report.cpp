@@ -103,6 +103,8 @@ void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
       for (double d : {4.0, 8.0, 12.0, 16.0}) {
         w.BeginObject().Number("distance_m", d);
         w.Number("scatter", pe.Law(static_cast<int>(k), m, d));
+        if (pe.floor_of.size() > k && pe.floor_of[k] >= 0)
+          w.Number("floor", pe.Floor(static_cast<int>(k), d));
         if (m == kMedianBias)
           w.Number("pct_of_distance", 100 * pe.Law(static_cast<int>(k), m, d) / d);
         w.EndObject();

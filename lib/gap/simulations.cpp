@@ -107,7 +107,9 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
       index[c] = it->second;
     }
     if (cells.empty()) continue;
-    const std::vector<sim::CellMetricsResult> r = sim::SimulateCellsMetrics(params[g], cells, mp);
+    sim::SimParams p = params[g];
+    p.dither_quantization = options.dither_quantization;
+    const std::vector<sim::CellMetricsResult> r = sim::SimulateCellsMetrics(p, cells, mp);
     for (int c = 0; c < d.num_cells(); ++c) {
       const int i = index[c];
       if (i < 0) continue;
@@ -168,6 +170,14 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
                      (2 * common::UniformOf(base.seed, "phase|" + c.name) - 1);
     ++s.runs;
     s.shifted = SimulateValues({base}, shifted, options);
+  }
+
+  if (options.placement_probe > 0) {
+    Design moved = d;
+    for (sim::Cell& c : moved.cells) c.distance_m *= 1 + options.placement_probe;
+    ++s.runs;
+    s.moved = SimulateValues({base}, moved, options);
+    s.moved_rel = options.placement_probe;
   }
 
   for (const Candidate& cand : candidates) {

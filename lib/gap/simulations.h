@@ -24,6 +24,13 @@ struct SimulateOptions {
   // The base once more with each panel moved sideways by a draw uniform within ±shift_px pixels
   // (fixed by the seed and the recording's name): the simulation's own scatter (noise.h); 0: not.
   double shift_px = 1.0;
+  // Every run's pixels quantized on lattices of their own phases (sim::SimParams): the model's
+  // metrics are a campaign's average over the phase of the subpixel step that its placements
+  // draw, not the one phase the nominal distance gives.
+  bool dither_quantization = true;
+  // The base once more with every panel placed this share of its distance further along its
+  // line of sight: what a placement error does to each metric (placement.h); 0: not.
+  double placement_probe = 0.02;
 
   bool IsValid(std::string* why) const;
 };
@@ -47,6 +54,8 @@ struct Simulations {
   std::vector<double> jac_logit_p;      // ∂ metric / ∂ logit p of the cell's scenario [obs]
   std::vector<double> replica;          // [obs] the base at seed + 1 (empty unless asked)
   std::vector<double> shifted;          // [obs] the base, panels moved sideways (shift_px)
+  std::vector<double> moved;            // [obs] the base, panels placed further (moved_rel)
+  double moved_rel = 0;                 // by this share of their distance
   std::vector<Surface> surfaces;        // one per candidate, in the candidates' order
   int runs = 0;                         // simulations of the whole table
 

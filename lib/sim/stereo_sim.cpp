@@ -128,11 +128,12 @@ bool Identical(const Window& a, const Window& b) {
 // Everything the depth-count table reads.
 struct CountsKey {
   double fb, step, min_depth_m, max_depth_m, depth_scale, depth_units_m;
+  double phase;  // the lattice's shift, in steps (dither_quantization)
 };
 bool Identical(const CountsKey& a, const CountsKey& b) {
   return Same(a.fb, b.fb) && Same(a.step, b.step) && Same(a.min_depth_m, b.min_depth_m) &&
          Same(a.max_depth_m, b.max_depth_m) && Same(a.depth_scale, b.depth_scale) &&
-         Same(a.depth_units_m, b.depth_units_m);
+         Same(a.depth_units_m, b.depth_units_m) && Same(a.phase, b.phase);
 }
 
 // Everything a window's ray cast and its depth edges read: the scene (its background moved by
@@ -238,8 +239,11 @@ class SharedCache {
 };
 
 // The article's 128 cells stand at 16 placements: their windows' casts take 3.0 MB, their regions
-// 1.3 MB, and one sensor's count table 10 kB.
-constexpr std::size_t kCountsCacheBytes = std::size_t{256} << 10;
+// 1.3 MB, and one sensor's count table 10 kB (17 with the dithered lattices').
+constexpr std::size_t kCountsCacheBytes = std::size_t{512} << 10;
+// Lattice phases of dither_quantization.
+constexpr int kDitherPhases = 16;
+double DitherPhase(int j) { return (j + 0.5) / kDitherPhases - 0.5; }
 constexpr std::size_t kCastCacheBytes = std::size_t{4} << 20;
 constexpr std::size_t kRegionCacheBytes = std::size_t{2} << 20;
 
@@ -326,23 +330,35 @@ void StereoSim::Build() {
   // table for every recording of a sensor.
   inv_step_ = 1.0 / s.subpixel_step_px;
   static SharedCache<CountsKey, CountsTable> counts_cache(kCountsCacheBytes);
-  const CountsKey counts_key{fb, s.subpixel_step_px, s.min_depth_m, s.max_depth_m,
-                             dep.depth_scale, s.depth_units_m};
-  counts_table_ = counts_cache.Find(counts_key);
-  if (!counts_table_) {
+  // The lattice shifted by `phase` steps: index k stands for disparity (k − phase)·step.
+  auto counts_table = [&](double phase) {
+    const CountsKey key{fb, s.subpixel_step_px, s.min_depth_m, s.max_depth_m,
+                        dep.depth_scale, s.depth_units_m, phase};
+    std::shared_ptr<const CountsTable> found = counts_cache.Find(key);
+    if (found) return found;
     auto t = std::make_shared<CountsTable>();
     t->k_min = static_cast<int>(std::ceil(fb / (s.max_depth_m * s.subpixel_step_px)));
     t->k_max = static_cast<int>(std::floor(fb / (s.min_depth_m * s.subpixel_step_px)));
     t->k_min = std::max(t->k_min, 1);
     t->counts.assign(static_cast<size_t>(t->k_max) + 1, 0);  // [0] stays 0: no depth
     for (int k = t->k_min; k <= t->k_max; ++k) {
-      const double depth_m = dep.depth_scale * fb / (k * s.subpixel_step_px);  // Z = f·B/d
+      const double depth_m = dep.depth_scale * fb / ((k - phase) * s.subpixel_step_px);  // f·B/d
       t->counts[k] =
           static_cast<std::uint16_t>(std::min(65535.0, std::round(depth_m / s.depth_units_m)));
     }
-    counts_cache.Insert(counts_key, t, sizeof(CountsTable) + t->counts.size() * 2);
-    counts_table_ = std::move(t);
-  }
+    counts_cache.Insert(key, t, sizeof(CountsTable) + t->counts.size() * 2);
+    return std::shared_ptr<const CountsTable>(std::move(t));
+  };
+  counts_table_ = counts_table(0.0);
+  dither_tables_.clear();
+  dither_counts_.clear();
+  dither_offset_.assign(kDitherPhases, 0.f);
+  if (params_.dither_quantization)
+    for (int j = 0; j < kDitherPhases; ++j) {
+      dither_tables_.push_back(counts_table(DitherPhase(j)));
+      dither_counts_.push_back(dither_tables_.back()->counts.data());
+      dither_offset_[j] = static_cast<float>(DitherPhase(j) * s.subpixel_step_px);
+    }
   k_min_ = counts_table_->k_min;
   k_max_ = counts_table_->k_max;
   counts_of_k_ = counts_table_->counts.data();
@@ -553,13 +569,25 @@ struct Maps {
   const float* gauss;
   const std::uint16_t* counts_of_k;
   float inv_step, k_min, k_end, offset, sigma;
+  // dither_quantization: each image pixel's lattice phase (of kDitherPhases) picks its shift
+  // (in disparity) and its table; null: the camera's one lattice.
+  const std::uint16_t* const* dither_counts;
+  const float* dither_offset;
 };
+
+// The lattice phase of an image pixel: fixed by its index alone, so that every frame and every
+// run of a pixel reads on one lattice (its spread over time is the camera's), while the pixels
+// of a region take every phase.
+inline int PhaseOfPixel(std::uint64_t image_pixel) {
+  return static_cast<int>((static_cast<std::uint32_t>(image_pixel) * 0x9E3779B1u) >> 28);
+}
 
 // kMasked: the count's index selected by a mask, not a branch (faster where holes are frequent
 // and unpredictable, as on the panel; the branch is faster over whole frames, where the pixels
 // that never give depth come in runs).
 template <bool kMixing, bool kMasked = false>
-inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
+inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel,
+                          std::uint64_t image_pixel) {
   const std::uint32_t uniform_valid = (bits >> kGaussBits) & ((1u << kValidBits) - 1);
   // d + offset + σ·n + mixing, quantized to the subpixel step: k = floor(d/step + ½). Single
   // precision: d < 200 px is resolved to 2e-5 px, far below the 1/32 px step.
@@ -569,6 +597,12 @@ inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
                       (1.0f / (1 << kMixBits));
     d += mix * m.mix_delta[pixel];
   }
+  const std::uint16_t* counts_of_k = m.counts_of_k;
+  if (m.dither_counts) {
+    const int j = PhaseOfPixel(image_pixel);
+    d += m.dither_offset[j];
+    counts_of_k = m.dither_counts[j];
+  }
   const float x = d * m.inv_step + 0.5f;
   // Valid and within [min, max] depth; counts_of_k[0] = 0 stands for "no depth". (Branch-free
   // forms of this select measured slower here than the branch.)
@@ -577,9 +611,9 @@ inline std::uint16_t Draw(const Maps& m, std::uint32_t bits, int pixel) {
     // x clamped to [0, k_end] first (NaN to 0), so that its conversion is always defined; the
     // same index wherever ok.
     const int k = static_cast<int>(std::min(m.k_end, std::max(0.0f, x)));
-    return m.counts_of_k[k & -static_cast<int>(ok)];
+    return counts_of_k[k & -static_cast<int>(ok)];
   } else {
-    return m.counts_of_k[ok ? static_cast<int>(x) : 0];
+    return counts_of_k[ok ? static_cast<int>(x) : 0];
   }
 }
 
@@ -596,10 +630,12 @@ void StereoSim::Render(int frame_index, records::DepthFrame* frame, int threads)
   const size_t n = static_cast<size_t>(in.width) * in.height;
   const bool whole = window_.width == in.width && window_.height == in.height;
   if (frame->counts.size() != n || !whole) frame->counts.assign(n, 0);
-  const float offset =
-      static_cast<float>(params_.departures.DisparityAtTimePx(frame_index / proto.fps));
+  const float offset = static_cast<float>(
+      params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
   const Maps maps{static_disparity_px_->data(), mix_delta_px_.data(), valid_threshold_.data(),
-                  gauss_, counts_of_k_, inv_step_f_, k_min_f_, k_end_f_, offset, sigma_f_};
+                  gauss_, counts_of_k_, inv_step_f_, k_min_f_, k_end_f_, offset, sigma_f_,
+                  dither_counts_.empty() ? nullptr : dither_counts_.data(),
+                  dither_offset_.data()};
   std::uint16_t* const counts = frame->counts.data();
   const std::uint64_t seed = truth_.cell_seed;
   // Pixels go by pairs of draws (counters 2j, 2j + 1) that share one hash. A pixel that never
@@ -608,23 +644,24 @@ void StereoSim::Render(int frame_index, records::DepthFrame* frame, int threads)
     constexpr bool kMix = decltype(mixing)::value;
     const Maps m = maps;  // a local copy the compiler keeps in registers
     const int w = window_.width;
-    auto one = [&](std::uint16_t* row, int base, std::uint64_t counter, int u) {
+    auto one = [&](std::uint16_t* row, int base, std::uint64_t counter, int u, size_t image) {
       const std::uint64_t c = counter + static_cast<std::uint64_t>(u);
-      row[u] = Draw<kMix>(m, HalfOf(Mix64(seed + (c >> 1) * kGolden), c), base + u);
+      row[u] = Draw<kMix>(m, HalfOf(Mix64(seed + (c >> 1) * kGolden), c), base + u, image + u);
     };
     for (int v = v_begin; v < v_end; ++v) {
-      std::uint16_t* const row =
-          counts + static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
+      const size_t image = static_cast<size_t>(window_.v0 + v) * in.width + window_.u0;
+      std::uint16_t* const row = counts + image;
       const int base = v * w;
       const std::uint64_t counter = Counter(frame_index, base);
       int u = 0;
-      if (counter & 1 && w > 0) one(row, base, counter, u++);
+      if (counter & 1 && w > 0) one(row, base, counter, u++, image);
       for (; u + 1 < w; u += 2) {
         const std::uint64_t hash = Mix64(seed + ((counter + u) >> 1) * kGolden);
-        row[u] = Draw<kMix>(m, static_cast<std::uint32_t>(hash), base + u);
-        row[u + 1] = Draw<kMix>(m, static_cast<std::uint32_t>(hash >> 32), base + u + 1);
+        row[u] = Draw<kMix>(m, static_cast<std::uint32_t>(hash), base + u, image + u);
+        row[u + 1] =
+            Draw<kMix>(m, static_cast<std::uint32_t>(hash >> 32), base + u + 1, image + u + 1);
       }
-      if (u < w) one(row, base, counter, u);
+      if (u < w) one(row, base, counter, u, image);
     }
   };
   if (mixing_)
@@ -638,7 +675,9 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
   const float offset = static_cast<float>(
       params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
   const Maps maps{static_disparity_px_->data(), mix_delta_px_.data(), valid_threshold_.data(),
-                  gauss_, counts_of_k_, inv_step_f_, k_min_f_, k_end_f_, offset, sigma_f_};
+                  gauss_, counts_of_k_, inv_step_f_, k_min_f_, k_end_f_, offset, sigma_f_,
+                  dither_counts_.empty() ? nullptr : dither_counts_.data(),
+                  dither_offset_.data()};
   const auto& in = params_.sensor.intrinsics;
   const std::uint64_t frame_base = static_cast<std::uint64_t>(frame_index) *
                                    static_cast<std::uint64_t>(in.width) * in.height;
@@ -658,7 +697,7 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
         pair = c >> 1;
         hash = Mix64(seed + pair * kGolden);
       }
-      out[i] = Draw<kMix, true>(m, HalfOf(hash, c), window[i]);
+      out[i] = Draw<kMix, true>(m, HalfOf(hash, c), window[i], image[i]);
     }
   };
   if (mixing_)

@@ -26,6 +26,12 @@ struct SimParams {
   SensorParams sensor;
   Departures departures;  // from the effects (BuildDepartures); none = the base model
   std::uint64_t seed = 1;
+  // Each image pixel's disparity quantized on the subpixel lattice shifted by a phase of its
+  // own (one of 16 over a step, fixed by the pixel's index: every frame of a pixel on one
+  // lattice) and read back from that lattice: a region's median then no longer sits at the one
+  // phase of the step the panel's distance gives. A model of what a campaign's placements
+  // average over, not of a camera (whose lattice is the same for every pixel).
+  bool dither_quantization = false;
 
   bool IsValid(std::string* why) const;
 };
@@ -118,6 +124,11 @@ class StereoSim {
   std::shared_ptr<const CountsTable> counts_table_;
   std::shared_ptr<const CastMaps> cast_;
   const std::uint16_t* counts_of_k_ = nullptr;  // in counts_table_
+  // With dither_quantization: the tables of the shifted lattices, one per phase, and each
+  // phase's shift in disparity.
+  std::vector<std::shared_ptr<const CountsTable>> dither_tables_;
+  std::vector<const std::uint16_t*> dither_counts_;
+  std::vector<float> dither_offset_;
   const float* true_depth_m_ = nullptr;         // in cast_
   const unsigned char* surface_ = nullptr;      // in cast_
   // True disparity + static departures (≤ 0: no depth): the cast's disparity when there are

@@ -221,7 +221,7 @@ TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
   options.frames = 4;
   const Simulations s = SimulateDesign(p, d, {}, options);
   ASSERT_EQ(s.shifted.size(), s.base.size());
-  EXPECT_EQ(s.runs, 6);  // base, two Jacobians (± each), shifted
+  EXPECT_EQ(s.runs, 7);  // base, two Jacobians (± each), shifted, moved further
   const int kk = d.num_metrics();
   bool any_moved = false;
   for (int c = 0; c < d.num_cells(); ++c) {
@@ -234,7 +234,7 @@ TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
   options.shift_px = 0;
   const Simulations none = SimulateDesign(p, d, {}, options);
   EXPECT_TRUE(none.shifted.empty());
-  EXPECT_EQ(none.runs, 5);
+  EXPECT_EQ(none.runs, 6);
   options.shift_px = -1;
   EXPECT_THROW(SimulateDesign(p, d, {}, options), std::invalid_argument);
 }
@@ -353,6 +353,51 @@ TEST(Placement, AUnitOfOneLightAndOnePresetStillEstimatesTheScatter) {
     EXPECT_GT(pe.departure[0][t], 1.0);
   }
   EXPECT_EQ(flagged, 1);
+}
+
+// A spread's placement scatter is at least what the median's law does to it through the
+// simulation: the base placed 2 % further moves log plane_std by 2·0.02 (a spread ∝ Z²), so
+// with the medians of a unit scattered by 2 % of D and log plane_std matching the base at every
+// test point (its own REML: no scatter), its scatter is |2/D|·τ_median(D), 0.04 at 16 m; with
+// no such simulation, none.
+TEST(Placement, ASpreadsScatterIsAtLeastWhatThePlacementLawDoesToIt) {
+  std::vector<records::PanelMetrics> rows;
+  for (double a : {0.0, 10.0, 20.0, 35.0})
+    for (double dist : {4.0, 8.0, 12.0, 16.0})
+      for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, a, "HA", emitter));
+  std::mt19937 rng(20261127);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::map<std::string, double> shift;
+  for (auto& r : rows) {
+    const std::string key = std::to_string(r.distance_m) + std::to_string(r.angle_deg);
+    if (!shift.count(key)) shift[key] = 0.02 * r.distance_m * unit(rng);
+    r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
+  }
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  Simulations s = MedianBiasOnly(d);
+  const NoiseEstimate n = EstimateNoise(d, s);
+  const int kk = d.num_metrics();
+  const int plane = static_cast<int>(
+      std::find(d.metrics.begin(), d.metrics.end(), kPlaneStd) - d.metrics.begin());
+  ASSERT_LT(plane, kk);
+  const std::vector<char> all(d.num_cells(), 1);
+  const PlacementEstimate without = EstimatePlacement(d, s, n, all, 0.05);
+  EXPECT_EQ(without.Floor(plane, 16), 0.0);
+  s.moved = s.base;
+  s.moved_rel = 0.02;
+  for (int c = 0; c < d.num_cells(); ++c) s.moved[static_cast<size_t>(c) * kk + plane] += 0.04;
+  const PlacementEstimate pe = EstimatePlacement(d, s, n, all, 0.05);
+  for (double dist : {4.0, 16.0}) {
+    const double expected = 2 / dist * pe.Law(0, kMedianBias, dist);
+    EXPECT_NEAR(pe.Floor(plane, dist), expected, 1e-9 + 1e-6 * expected) << dist;
+    EXPECT_GE(pe.Law(plane, kPlaneStd, dist), expected) << dist;
+    EXPECT_GT(expected, without.Law(plane, kPlaneStd, dist)) << dist;
+  }
+  EXPECT_NEAR(pe.Floor(plane, 16), 0.04, 0.02);
+  for (int t = 0; t < pe.num_points; ++t)
+    EXPECT_GE(pe.tau[plane][t], pe.Floor(plane, pe.point_distance_m[t]) - 1e-12);
 }
 
 // The same units without a misplaced point, 20 seeds: the test at p < 0.05 / 16 flags a point in
