@@ -236,7 +236,7 @@ double PlacementEstimate::Floor(int k, double distance_m) const {
   for (size_t j = 1; j < floor_distance_m.size(); ++j)
     if (std::fabs(floor_distance_m[j] - distance_m) < std::fabs(floor_distance_m[i] - distance_m))
       i = j;
-  return std::fabs(sensitivity[k][i]) * (a[m] + b[m] * distance_m);
+  return std::fabs(sensitivity[k][i]) * Law(m, kMedianBias, distance_m);
 }
 
 PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
@@ -265,11 +265,11 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
   pe.sensitivity.assign(kk, {});
   const auto median = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
   if (median != d.metrics.end() && !sims.moved.empty() && sims.moved_rel > 0) {
-    for (int t = 0; t < np; ++t)
-      if (std::find(pe.floor_distance_m.begin(), pe.floor_distance_m.end(),
-                    pe.point_distance_m[t]) == pe.floor_distance_m.end())
-        pe.floor_distance_m.push_back(pe.point_distance_m[t]);
+    pe.floor_distance_m = pe.point_distance_m;
     std::sort(pe.floor_distance_m.begin(), pe.floor_distance_m.end());
+    pe.floor_distance_m.erase(
+        std::unique(pe.floor_distance_m.begin(), pe.floor_distance_m.end()),
+        pe.floor_distance_m.end());
     for (int k = 0; k < kk; ++k) {
       if (d.metrics[k] != kPlaneStd && d.metrics[k] != kTemporalStd) continue;
       pe.floor_of[k] = static_cast<int>(median - d.metrics.begin());
@@ -289,15 +289,10 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
   }
   const double z_crit = TwoSidedCritical(alpha / std::max(1, np));
 
-  // The median first: its law is the floor of others'.
-  std::vector<int> order;
-  if (median != d.metrics.end()) order.push_back(static_cast<int>(median - d.metrics.begin()));
-  for (int k = 0; k < kk; ++k)
-    if (d.metrics[k] != kMedianBias) order.push_back(k);
-  for (const int k : order) {
+  // The metrics come in their enum's order, the median (a core metric) first: its law is
+  // known before the spreads' floors read it.
+  for (int k = 0; k < kk; ++k) {
     const int metric = d.metrics[k];
-    // The floor of this metric's scatter at each block's distance (0: none).
-    auto floor_at = [&](double dist) { return pe.Floor(k, dist); };
     std::vector<int> cells;
     for (int c = 0; c < d.num_cells(); ++c) {
       const size_t o = static_cast<size_t>(c) * kk + k;
@@ -383,7 +378,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
         if (flag[t]) continue;  // a flag stays: the search only grows (it cannot oscillate)
         const double s = r.s[j];
         const double m = (r.w[j] - r.v[j].dot(beta)) / s;  // mean residual about X·β
-        const double tau = std::max(a * r.f0[j] + b * r.f1[j], floor_at(pe.point_distance_m[t]));
+        const double tau = std::max(a * r.f0[j] + b * r.f1[j], pe.Floor(k, pe.point_distance_m[t]));
         // Var(m_t) = τ² + 1/S_t ∓ the fixed effects' share (− for a point informing β, + for a
         // flagged one, predicted from the others).
         const double lev = r.v[j].dot(c_inv * r.v[j]) / (s * s);
@@ -419,7 +414,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
           const double s = r.s[top];
           const double m = (r.w[top] - r.v[top].dot(tbeta)) / s;
           const double tau = std::max(ta * r.f0[top] + tb * r.f1[top],
-                                      floor_at(pe.point_distance_m[block_point[top]]));
+                                      pe.Floor(k, pe.point_distance_m[block_point[top]]));
           const double var =
               tau * tau + 1.0 / s + r.v[top].dot(tc_inv * r.v[top]) / (s * s);
           // The law is refitted from the other points: their degrees of freedom less the

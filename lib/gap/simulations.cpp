@@ -62,6 +62,8 @@ bool SimulateOptions::IsValid(std::string* why) const {
   if (!(step_log_sigma > 0 && step_log_sigma < 1) || !(step_logit_p > 0 && step_logit_p < 3))
     return fail("nuisance steps must be in (0, 1) (log σ_d) and (0, 3) (logit p)");
   if (!(shift_px >= 0 && shift_px <= 10)) return fail("shift_px must be in [0, 10]");
+  if (!(placement_probe >= 0 && placement_probe <= 0.2))
+    return fail("placement_probe must be in [0, 0.2]");
   return true;
 }
 

@@ -237,6 +237,9 @@ TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
   EXPECT_EQ(none.runs, 6);
   options.shift_px = -1;
   EXPECT_THROW(SimulateDesign(p, d, {}, options), std::invalid_argument);
+  options.shift_px = 0;
+  options.placement_probe = -0.02;
+  EXPECT_THROW(SimulateDesign(p, d, {}, options), std::invalid_argument);
 }
 
 // A simulation that reads every metric but the median bias as the real one (and the median bias
@@ -320,7 +323,7 @@ TEST(Placement, RemlFindsTheScatterLawAndFlagsTheMisplacedPoint) {
 // 6 m at every distance on such a unit); it is left out there. A misplaced point spills a
 // quarter of its departure into its row's and its column's effects and inflates the law, so it
 // is also judged left out of the fit.
-PlacementEstimate UnitPlacement(std::uint32_t seed, bool misplaced) {
+std::vector<records::PanelMetrics> UnitRows(std::uint32_t seed, bool misplaced) {
   std::vector<records::PanelMetrics> rows;
   for (double a : {0.0, 10.0, 20.0, 35.0})
     for (double dist : {4.0, 8.0, 12.0, 16.0})
@@ -335,7 +338,11 @@ PlacementEstimate UnitPlacement(std::uint32_t seed, bool misplaced) {
     if (misplaced && r.distance_m == 8 && r.angle_deg == 10) shift[key] = 2.0;
     r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
   }
-  return PlacementOf(rows);
+  return rows;
+}
+
+PlacementEstimate UnitPlacement(std::uint32_t seed, bool misplaced) {
+  return PlacementOf(UnitRows(seed, misplaced));
 }
 
 TEST(Placement, AUnitOfOneLightAndOnePresetStillEstimatesTheScatter) {
@@ -361,21 +368,9 @@ TEST(Placement, AUnitOfOneLightAndOnePresetStillEstimatesTheScatter) {
 // test point (its own REML: no scatter), its scatter is |2/D|·τ_median(D), 0.04 at 16 m; with
 // no such simulation, none.
 TEST(Placement, ASpreadsScatterIsAtLeastWhatThePlacementLawDoesToIt) {
-  std::vector<records::PanelMetrics> rows;
-  for (double a : {0.0, 10.0, 20.0, 35.0})
-    for (double dist : {4.0, 8.0, 12.0, 16.0})
-      for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, a, "HA", emitter));
-  std::mt19937 rng(20261127);
-  std::normal_distribution<double> unit(0.0, 1.0);
-  std::map<std::string, double> shift;
-  for (auto& r : rows) {
-    const std::string key = std::to_string(r.distance_m) + std::to_string(r.angle_deg);
-    if (!shift.count(key)) shift[key] = 0.02 * r.distance_m * unit(rng);
-    r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
-  }
   Design d;
   std::string why;
-  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  ASSERT_TRUE(BuildDesign(UnitRows(20261127, false), &d, &why)) << why;
   Simulations s = MedianBiasOnly(d);
   const NoiseEstimate n = EstimateNoise(d, s);
   const int kk = d.num_metrics();
@@ -590,9 +585,6 @@ TEST(Candidates, EveryRegisteredEffectHasAValidGrid) {
   EXPECT_NE(why.find("lens_flare"), std::string::npos);
 }
 
-// region_spill: the region reaches w whole pixels past the panel's outline onto a background at
-// r times the panel's depth. Its signature: more pixels, a far tail (mean − median), a wider
-// panel; none at w = 0; and the whole spill inside the rendered window up to its 5 px bound.
 // p with one registered effect added.
 sim::SimParams WithEffect(const sim::SimParams& p, const sim::EffectSpec& effect) {
   sim::SimParams q = p;
@@ -601,15 +593,30 @@ sim::SimParams WithEffect(const sim::SimParams& p, const sim::EffectSpec& effect
   return q;
 }
 
-TEST(RegionSpill, SignatureInTheMetrics) {
+// The signature tests' sensor (σ_d 0.08 px, hole probability p) and seed, and their cell.
+sim::SimParams SignatureSensor(double invalid_prob, std::uint64_t seed) {
   sim::SimParams p;
-  p.sensor.fallback = {"", "", 0.08, 0.2};
-  p.seed = 5;
+  p.sensor.fallback = {"", "", 0.08, invalid_prob};
+  p.seed = seed;
+  return p;
+}
+sim::Cell SignatureCell(double distance_m, double angle_deg, const std::string& preset,
+                        bool emitter_on) {
   sim::Cell c;
-  c.distance_m = 12;
-  c.angle_deg = 20;
-  c.preset = "HD";
+  c.distance_m = distance_m;
+  c.angle_deg = angle_deg;
+  c.preset = preset;
+  c.emitter_on = emitter_on;
   c.name = sim::CellName(c);
+  return c;
+}
+
+// region_spill: the region reaches w whole pixels past the panel's outline onto a background at
+// r times the panel's depth. Its signature: more pixels, a far tail (mean − median), a wider
+// panel; none at w = 0; and the whole spill inside the rendered window up to its 5 px bound.
+TEST(RegionSpill, SignatureInTheMetrics) {
+  const sim::SimParams p = SignatureSensor(0.2, 5);
+  const sim::Cell c = SignatureCell(12, 20, "HD", false);
   sim::MetricsParams mp;
   mp.frames = 5;
   auto with = [&](double w, double r) {
@@ -642,16 +649,11 @@ TEST(RegionSpill, SignatureInTheMetrics) {
 // same to the bit whatever the gain; with it on at 4 m (within its reach) a gain of 0 gives the
 // emitter-off valid share, and a larger gain more valid pixels; the depths do not move.
 TEST(EmitterGain, SignatureInTheMetrics) {
-  sim::SimParams p;
-  p.sensor.fallback = {"", "", 0.08, 0.6};
-  p.seed = 9;
+  const sim::SimParams p = SignatureSensor(0.6, 9);
   sim::MetricsParams mp;
   mp.frames = 5;
   auto at = [&](double gain, bool on) {
-    sim::Cell c;
-    c.distance_m = 4;
-    c.emitter_on = on;
-    c.name = sim::CellName(c);
+    const sim::Cell c = SignatureCell(4, 0, sim::Cell().preset, on);
     return sim::SimulateMetrics(WithEffect(p, {"emitter_gain", {{"gain", gain}}}), c, mp).metrics;
   };
   const auto off = at(1, false), off_zero = at(0, false);
