@@ -280,7 +280,7 @@ std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
                                          : std::string("∞ (not selected, or a width differs)")) +
          " | " +
          (std::isfinite(o.shrink_simulated_pct) ? Num(o.shrink_simulated_pct, 3) + " %"
-                                                : "not published") +
+                                                : "-") +
          " | " + o.unexplained + " | " + (o.pass ? "yes" : "**no**") + " | " + o.why + " |\n";
   }
   if (!nulls.empty()) {

@@ -94,7 +94,7 @@ struct GapStat {
 
 struct EffectResult {
   std::string name;
-  bool per_scenario = false;        // the version kept (better ΔBIC)
+  bool per_scenario = false;        // kept per scenario: better by ΔBIC and held out
   TermFit fit;
   double delta_bic = 0;             // of the version kept, against the calibrated base
   double delta_bic_shared = 0, delta_bic_per_scenario = 0;
@@ -159,8 +159,11 @@ struct Nested {
   std::vector<double> z_baseline, z_calibrated, z_selected, z_simulated;  // [obs], fold units
   std::vector<double> z_simulated_calibrated;  // the fold's calibrated base simulated [obs]
   GapStat baseline, calibrated, selected, simulated, simulated_calibrated;
+  // Shares of the held-out gap beyond the noise removed (Shrink in select.h), NaN when the
+  // baseline leaves no excess.
   double shrink_heldout_nested_pct = NAN;  // baseline → selection added, held out
   double shrink_simulated_pct = NAN;       // baseline → selection simulated, held out
+  bool simulated_run = false;              // every fold simulated
   double gain = 0;                     // Σ folds' calibrated − selected held-out deviance
   // Σz² of the held-out cells simulated with each fold's calibrated base minus simulated with
   // its selection added: what the selections earn where the simulator, not the fits'

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "gap/report_util.h"
+#include "gap/select.h"
 #include "gap/unexplained.h"
 
 namespace depthbias::gap::text {
@@ -141,11 +142,11 @@ std::string Headline(const DiagnoseResult& r) {
     if (std::isfinite(n.gain_simulated))
       o << "how far, effects alone: the folds' calibrated base simulated "
         << Num(n.simulated_calibrated.overall) << " -> " << Num(n.simulated.overall)
-        << " with their selections (" << Pct(ShrinkPct(n.simulated_calibrated, n.simulated))
+        << " with their selections (" << Pct(Shrink(n.simulated_calibrated, n.simulated))
         << ")\n";
   } else {
     o << "how far: gap " << Num(r.baseline.overall) << " -> " << Num(r.selected_heldout.overall)
-      << " held out (" << Pct(ShrinkPct(r.baseline_heldout, r.selected_heldout))
+      << " held out (" << Pct(Shrink(r.baseline_heldout, r.selected_heldout))
       << "); no nested hold-out" << (n.message.empty() ? "" : ": " + n.message) << "\n";
   }
   o << "left: " << r.remaining.size() << " of " << r.design.num_cells()
@@ -250,7 +251,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
     row("baseline", n.baseline);
     row("calibrated", n.calibrated);
     row("selection added", n.selected);
-    if (std::isfinite(n.shrink_simulated_pct)) row("selection simulated", n.simulated);
+    if (n.simulated_run) row("selection simulated", n.simulated);
     o << "\nShrink held out: " << Pct(n.shrink_simulated_pct) << " simulated (the headline), "
       << Pct(n.shrink_heldout_nested_pct) << " added.\n";
   }

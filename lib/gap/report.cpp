@@ -7,6 +7,7 @@
 
 #include "gap/json.h"
 #include "gap/report_util.h"
+#include "gap/select.h"
 
 namespace depthbias::gap {
 namespace {
@@ -69,10 +70,6 @@ std::string CellName(const DiagnoseResult& r, int c) {
   const sim::Cell& cell = r.design.cells[c];
   return cell.light + " " + cell.preset + " emitter " + (cell.emitter_on ? "on" : "off") + " " +
          Num(cell.distance_m) + " m " + Num(cell.angle_deg) + "°";
-}
-
-double Shrink(const GapStat& before, const GapStat& after) {
-  return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : NAN;
 }
 
 void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
@@ -159,7 +156,7 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
   GapJsonStat(w, "baseline", r, n.baseline);
   GapJsonStat(w, "calibrated", r, n.calibrated);
   GapJsonStat(w, "selected", r, n.selected);
-  if (std::isfinite(n.shrink_simulated_pct)) {
+  if (n.simulated_run) {
     GapJsonStat(w, "simulated", r, n.simulated);
     GapJsonStat(w, "simulated_calibrated", r, n.simulated_calibrated);
   } else {

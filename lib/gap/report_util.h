@@ -27,10 +27,6 @@ inline std::string Pct(double v) {
   return buf;
 }
 
-inline double ShrinkPct(const GapStat& before, const GapStat& after) {
-  return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : NAN;
-}
-
 // A term's parameters: "p v, q w" (per scenario "S: …; T: …"), with 95 % intervals and a
 // "(grid edge)" mark on request; with hide_edges a value on the grid's edge is not given (it is
 // no measurement) but said to be there.

@@ -46,7 +46,8 @@ GapStat Stat(const GapModel& m, const std::vector<double>& z, const std::vector<
 }
 
 double Shrink(const GapStat& before, const GapStat& after) {
-  return before.overall > 0 ? 100.0 * (1.0 - after.overall / before.overall) : 0.0;
+  const double excess = before.overall - 1.0;
+  return excess > 0 ? 100.0 * (before.overall - after.overall) / excess : NAN;
 }
 
 // Dispersion of each metric about a prediction: the φ ≥ 1 at which the mean deviance of its
@@ -214,6 +215,7 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
   };
   struct Alone {
     ModelFit shared, per;
+    bool per_scenario = false;
     HeldOut ho;
     std::vector<double> mu;
   };
@@ -228,10 +230,25 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
       if (shared_only) return;
       if (design.num_scenarios() > 1) a.per = FitCandidate(fixed, i, true, train, &a.shared);
       if (!a.shared.success && !a.per.success) return;
+      // Per scenario only when it earns both ways: by BIC, and on the held-out cells against
+      // the shared fit (three scenarios' extra values can buy BIC from the simulation's own
+      // misfit of a large effect, and fit it differently in each scenario).
       const double per_bic = a.per.success ? dbic(a.per) : -INFINITY;
-      const ModelFit& f = per_bic > dbic(a.shared) ? a.per : a.shared;
-      a.ho = CrossValidate(fixed, {f.terms[0].term}, fold, num_folds, f, train);
-      if (a.ho.success) a.mu = fixed.Predict(f);
+      a.per_scenario = !a.shared.success || per_bic > dbic(a.shared);
+      if (a.per_scenario) {
+        a.ho = CrossValidate(fixed, {a.per.terms[0].term}, fold, num_folds, a.per, train);
+        if (a.shared.success) {
+          HeldOut ho = CrossValidate(fixed, {a.shared.terms[0].term}, fold, num_folds, a.shared,
+                                     train);
+          if (ho.success && (!a.ho.success || ho.data_deviance <= a.ho.data_deviance)) {
+            a.per_scenario = false;
+            a.ho = std::move(ho);
+          }
+        }
+      } else {
+        a.ho = CrossValidate(fixed, {a.shared.terms[0].term}, fold, num_folds, a.shared, train);
+      }
+      if (a.ho.success) a.mu = fixed.Predict(a.per_scenario ? a.per : a.shared);
     });
   };
   fit_alone(true);
@@ -287,10 +304,10 @@ Selection Select(GapModel& model, const std::vector<char>& train, const std::vec
       r.message = e.name + ": " + shared.message;
       return r;
     }
-    e.per_scenario = e.delta_bic_per_scenario > e.delta_bic_shared;
+    e.per_scenario = alone[i].per_scenario;
     const ModelFit& f = e.per_scenario ? per : shared;
     e.fit = f.terms[0];
-    e.delta_bic = std::max(e.delta_bic_shared, e.delta_bic_per_scenario);
+    e.delta_bic = e.per_scenario ? e.delta_bic_per_scenario : e.delta_bic_shared;
     const HeldOut& ho = alone[i].ho;
     if (!ho.success) {
       r.message = e.name + ": " + ho.message;

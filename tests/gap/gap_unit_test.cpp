@@ -18,6 +18,7 @@
 #include "gap/localize.h"
 #include "gap/noise.h"
 #include "gap/placement.h"
+#include "gap/select.h"
 #include "gap/simulations.h"
 #include "gap/unexplained.h"
 #include "sim/sim_metrics.h"
@@ -564,6 +565,25 @@ TEST(ChiSquare, SurvivalMatchesKnownQuantiles) {
   EXPECT_NEAR(ChiSquareSurvival(9.487729, 4), 0.05, 1e-6);
   EXPECT_NEAR(ChiSquareSurvival(23.20925, 10), 0.01, 1e-6);
   EXPECT_NEAR(ChiSquareSurvival(0, 3), 1.0, 1e-12);
+}
+
+// The shrink is the share of the gap beyond the noise: a model matching the camera leaves mean
+// z² = 1 and reaches 100 %, however much of the table sat at its noise floor.
+TEST(Shrink, IsTheShareOfTheGapBeyondTheNoise) {
+  auto stat = [](double overall) {
+    GapStat g;
+    g.overall = overall;
+    g.count = 224;
+    return g;
+  };
+  // Six metrics at the floor (z² 1) and one at 20: mean 23 / 7 before, 1 after.
+  const double before = (6 + 20) / 7.0;
+  EXPECT_NEAR(Shrink(stat(before), stat(1.0)), 100.0, 1e-9);
+  EXPECT_LT(100 * (1 - 1.0 / before), 73.1);  // the plain ratio could not get there
+  EXPECT_NEAR(Shrink(stat(5.0), stat(3.0)), 50.0, 1e-9);
+  EXPECT_NEAR(Shrink(stat(5.0), stat(7.0)), -50.0, 1e-9);  // a model that widens the gap
+  EXPECT_TRUE(std::isnan(Shrink(stat(1.0), stat(0.8))));  // no gap to shrink
+  EXPECT_TRUE(std::isnan(Shrink(stat(0.9), stat(0.8))));
 }
 
 TEST(Json, EscapesAndWritesNullForNonFinite) {

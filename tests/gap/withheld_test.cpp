@@ -85,6 +85,8 @@ TEST(Criteria, EachWrongAnswerFails) {
       {"the simulated shrink below 70 %", Json(right, "\"shrink_simulated_pct\": 69.9"),
        Offset()},
       {"the simulated shrink not published", Json(right, "\"shrink_heldout_pct\": 95"), Offset()},
+      {"no held-out gap beyond the noise to shrink", Json(right, "\"shrink_simulated_pct\": null"),
+       Offset()},
       {"shared where the truth is one light's",
        Json(right, shrink), Offset("sunset")},
       {"per scenario, the daylight one 0.05 px (25 %) off",
