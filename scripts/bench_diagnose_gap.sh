@@ -7,9 +7,12 @@
 # the machine's load is printed (a shared machine gives less than its cores).
 # Usage: scripts/bench_diagnose_gap.sh [BUILD_DIR]   (REPEAT=3 OUT_DIR=/tmp/...)
 set -euo pipefail
-# A command failing inside $(...) would end the script without a word under set -e: say which.
+# A command failing inside an assigned $(...) would end the script without a word under set -e:
+# say which. Figures are assigned before they are printed (scripts/bench_lib.sh).
 trap 'echo "bench_diagnose_gap: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 cd "$(dirname "$0")/.."
+BENCH=bench_diagnose_gap
+source scripts/bench_lib.sh
 BUILD_DIR=${1:-${BUILD_DIR:-build}}
 APP="$BUILD_DIR/apps/diagnose_gap"
 SIM="$BUILD_DIR/apps/simulate"
@@ -17,6 +20,7 @@ for b in "$APP" "$SIM"; do
   [ -x "$b" ] || { echo "bench_diagnose_gap: $b not built (run scripts/build.sh)" >&2; exit 1; }
 done
 REPEAT=${REPEAT:-3}
+bench_positive_int REPEAT "$REPEAT"
 OUT_DIR=${OUT_DIR:-$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)}
 trap 'rm -rf "$OUT_DIR"' EXIT
 REAL=config/data/paper_d455_outdoor.csv
@@ -26,10 +30,8 @@ timed() {  # prints "wall_s cpu_s"
     { echo "bench_diagnose_gap: $* failed" >&2; return 1; }
   awk '{printf "%s %.2f\n", $1, $2 + $3}' "$OUT_DIR/time.txt"
 }
-best() { sort -g | head -1; }
-
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
-     "load $(cut -d' ' -f1-3 /proc/loadavg)"
+machine=$(bench_machine)
+echo "machine: $machine"
 runs=() sims=()
 for _ in $(seq "$REPEAT"); do
   runs+=("$(timed "$APP" --real "$REAL" --out "$OUT_DIR/out")")
@@ -42,7 +44,8 @@ wall=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f1 | best)
 cpu=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f2 | best)
 swall=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f1 | best)
 scpu=$(printf '%s\n' "${sims[@]}" | cut -d' ' -f2 | best)
-echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
+load_after=$(cut -d' ' -f1-3 /proc/loadavg)
+echo "load after: $load_after"
 printf '%-58s %9s %9s %s\n' "case (best of $REPEAT)" "wall [s]" "CPU [s]" "target"
 n_cand=$(python3 -c 'import json, sys; print(len(json.load(open(sys.argv[1]))["settings"]["candidates"]))' \
   "$OUT_DIR/out/gap.json" 2>/dev/null || echo "?")
@@ -50,4 +53,5 @@ printf '%-58s %9s %9s %s\n' "diagnose_gap, 128 rows, $n_cand candidates, nested 
   "$wall" "$cpu" "≤ 30 s wall on 2 cores (aim 10 s)"
 printf '%-58s %9s %9s %s\n' "peer: simulate --metrics-only, 128 cells x 10 frames" \
   "$swall" "$scpu" "one of the $n_sims"
-awk -v c="$cpu" 'BEGIN {printf "CPU time over 2 cores (an idle 2-core machine): %.1f s\n", c / 2}'
+over_two=$(bench_ratio "$cpu" 2)
+printf 'CPU time over 2 cores (an idle 2-core machine): %.1f s\n' "$over_two"

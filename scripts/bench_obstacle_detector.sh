@@ -13,13 +13,19 @@
 # bushes, a hedge; High Density, emitter on), FRAMES frames. Target: >= 30 frames/s.
 # Usage: bash scripts/bench_obstacle_detector.sh   (BUILD_DIR=build FRAMES=150 REPEAT=3 CORE=0)
 set -euo pipefail
-# A command failing inside $(...) would end the script without a word under set -e: say which.
+# A command failing inside an assigned $(...) would end the script without a word under set -e:
+# say which. Figures are assigned before they are printed (scripts/bench_lib.sh).
 trap 'echo "bench_obstacle_detector: line $LINENO failed: $BASH_COMMAND" >&2' ERR
 cd "$(dirname "$0")/.."
+BENCH=bench_obstacle_detector
+source scripts/bench_lib.sh
 BIN=${BUILD_DIR:-build}/apps
 FRAMES=${FRAMES:-150}
 REPEAT=${REPEAT:-3}
 CORE=${CORE:-0}
+bench_positive_int FRAMES "$FRAMES"
+bench_positive_int REPEAT "$REPEAT"
+[[ "$CORE" =~ ^[0-9]+$ ]] || { echo "bench_obstacle_detector: CORE must be a core number, not '$CORE'" >&2; exit 1; }
 PY=.venv/bin/python
 for app in obstacle_detector simulate fit_bias bag_info; do
   [ -x "$BIN/$app" ] || { echo "bench_obstacle_detector: $BIN/$app not built" >&2; exit 1; }
@@ -60,14 +66,14 @@ sensor.close()
 print(len(done))
 PY
 
-best() { sort -g | head -1; }
 # Wall seconds of a command pinned to one core (the whole process).
 timed() {
   /usr/bin/time -f "%e" -o "$OUT/time.txt" taskset -c "$CORE" "$@" > "$OUT/stdout.txt" ||
     { echo "bench_obstacle_detector: $* failed" >&2; return 1; }
   cat "$OUT/time.txt"
 }
-run() { for _ in $(seq "$REPEAT"); do timed "$@"; done | best; }
+# Best of REPEAT; the first failed run fails it (the loop's last status alone would hide it).
+run() { { for _ in $(seq "$REPEAT"); do timed "$@" || exit 1; done; } | best; }
 
 det_s=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" \
           --config config/obstacle_detector.yaml --out "$OUT/d.jsonl" "$BAG")
@@ -116,20 +122,30 @@ read_s=$(run "$BIN/bag_info" --read-all "$BAG")
 play_s=$(run "$PY" "$OUT/playback.py" "$BAG" "$FRAMES")
 played=$(cat "$OUT/stdout.txt")
 
-echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)," \
-     "load $(cut -d' ' -f1-3 /proc/loadavg); one core (taskset -c $CORE), best of $REPEAT"
-echo "recording: $FRAMES frames 1280x720, $(du -m "$BAG" | cut -f1) MB; detector found" \
-     "$(echo "$obst / $lines" | bc -l | xargs printf '%.1f') obstacles per frame"
+machine=$(bench_machine)
+bag_mb=$(du -m "$BAG" | cut -f1)
+per_frame=$(bench_ratio "$obst" "$lines")
+det_fps=$(bench_ratio "$lines" "$det_s")
+play_fps=$(bench_ratio "$played" "$play_s")
+read_fps=$(bench_ratio "$FRAMES" "$read_s")
+declare -A var_fps var_cmp
+for v in vox clu both; do
+  var_fps[$v]=$(bench_ratio "$lines" "${var_s[$v]}")
+  var_cmp[$v]=$("$PY" "$OUT/compare.py" "$OUT/d.jsonl" "$OUT/d_$v.jsonl")
+done
+echo "machine: $machine; one core (taskset -c $CORE), best of $REPEAT"
+printf 'recording: %s frames 1280x720, %s MB; detector found %.1f obstacles per frame\n' \
+  "$FRAMES" "$bag_mb" "$per_frame"
 printf '%-58s %8s %12s %12s\n' "case (whole process)" "wall_s" "measured" "target"
 printf '%-58s %8.2f %8.1f f/s %12s\n' "obstacle_detector (read, detect, correct, JSONL)" \
-  "$det_s" "$(echo "$lines / $det_s" | bc -l)" ">= 30 f/s"
+  "$det_s" "$det_fps" ">= 30 f/s"
 declare -A label=([vox]="... with pcl::VoxelGrid" [clu]="... with pcl::ConditionalEuclideanClustering"
                   [both]="... with both")
 for v in vox clu both; do
-  printf '%-58s %8.2f %8.1f f/s   %s\n' "${label[$v]}" "${var_s[$v]}" \
-    "$(echo "$lines / ${var_s[$v]}" | bc -l)" "$("$PY" "$OUT/compare.py" "$OUT/d.jsonl" "$OUT/d_$v.jsonl")"
+  printf '%-58s %8.2f %8.1f f/s   %s\n' "${label[$v]}" "${var_s[$v]}" "${var_fps[$v]}" \
+    "${var_cmp[$v]}"
 done
 printf '%-58s %8.2f %8.1f f/s\n' "peer: librealsense playback alone (pyrealsense2)" \
-  "$play_s" "$(echo "$played / $play_s" | bc -l)"
+  "$play_s" "$play_fps"
 printf '%-58s %8.2f %8.1f f/s\n' "peer: depthbias BagReader alone (bag_info --read-all)" \
-  "$read_s" "$(echo "$FRAMES / $read_s" | bc -l)"
+  "$read_s" "$read_fps"

@@ -163,7 +163,6 @@ struct Nested {
   // baseline leaves no excess.
   double shrink_heldout_nested_pct = NAN;  // baseline → selection added, held out
   double shrink_simulated_pct = NAN;       // baseline → selection simulated, held out
-  bool simulated_run = false;              // every fold simulated
   double gain = 0;                     // Σ folds' calibrated − selected held-out deviance
   // Σz² of the held-out cells simulated with each fold's calibrated base minus simulated with
   // its selection added: what the selections earn where the simulator, not the fits'

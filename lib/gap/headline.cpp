@@ -251,7 +251,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
     row("baseline", n.baseline);
     row("calibrated", n.calibrated);
     row("selection added", n.selected);
-    if (n.simulated_run) row("selection simulated", n.simulated);
+    if (n.simulated.count > 0) row("selection simulated", n.simulated);
     o << "\nShrink held out: " << Pct(n.shrink_simulated_pct) << " simulated (the headline), "
       << Pct(n.shrink_heldout_nested_pct) << " added.\n";
   }

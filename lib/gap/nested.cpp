@@ -181,7 +181,6 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   n.calibrated = Stat(full, n.z_calibrated, n.cells);
   n.selected = Stat(full, n.z_selected, n.cells);
   n.shrink_heldout_nested_pct = Shrink(n.baseline, n.selected);
-  n.simulated_run = all_simulated;
   if (all_simulated) {
     n.simulated = Stat(full, n.z_simulated, n.cells);
     n.shrink_simulated_pct = Shrink(n.baseline, n.simulated);

@@ -156,7 +156,7 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
   GapJsonStat(w, "baseline", r, n.baseline);
   GapJsonStat(w, "calibrated", r, n.calibrated);
   GapJsonStat(w, "selected", r, n.selected);
-  if (n.simulated_run) {
+  if (n.simulated.count > 0) {  // every fold simulated
     GapJsonStat(w, "simulated", r, n.simulated);
     GapJsonStat(w, "simulated_calibrated", r, n.simulated_calibrated);
   } else {
