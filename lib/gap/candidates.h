@@ -26,6 +26,11 @@ struct Axis {
   double min_value = -INFINITY, max_value = INFINITY;
 };
 
+// The coordinate an axis's values are interpolated and smoothed in: the log for a log-scale axis.
+inline double Coordinate(const Axis& axis, double value) {
+  return axis.log_scale ? std::log(value) : value;
+}
+
 struct Candidate {
   std::string effect;      // registry name
   std::vector<Axis> axes;  // one or two

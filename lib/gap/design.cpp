@@ -15,7 +15,7 @@ const MetricInfo kMetrics[kNumMetrics] = {
     {"median_bias_m", "m", "median depth − nominal distance", 2.0, 2.0, 0.002, true,
      MetricInfo::kDisparityStep},
     {"mean_minus_median_m", "m", "mean − median depth (far tail of the region's samples)", 2.0,
-     2.0, 0.002, true, MetricInfo::kDisparityStep},
+     2.0, 0.002, true, MetricInfo::kDisparityStep, true},
     // A statistic over the N ∝ Z⁻² pixels of a panel of fixed size: the log of a spread and a
     // share of valid pixels (binomial) both scatter as 1/√N ∝ Z between recordings (emitter
     // twins of the withheld suite's tables without effect, 4 → 16 m: log plane_std 0.0040 →
@@ -30,9 +30,9 @@ const MetricInfo kMetrics[kNumMetrics] = {
     // The fitted normal's angle error: σ_Z ∝ Z² over a panel of fixed size seen by N ∝ Z⁻²
     // pixels, σ_tilt ∝ σ_Z / (size·√N) ∝ Z³ (and a tilt's magnitude is biased up by as much).
     {"normal_tilt_deg", "deg", "angle of the fitted panel normal to the optical axis", 3.0, 3.0,
-     0.05, false, MetricInfo::kNone},
+     0.05, false, MetricInfo::kNone, true},
     {"panel_width_m", "m", "width of the panel found", 1.0, 1.0, 0.002, false,
-     MetricInfo::kPixel},
+     MetricInfo::kPixel, true},
 };
 
 std::string Where(const records::PanelMetrics& row, size_t index) {

@@ -46,6 +46,10 @@ struct MetricInfo {
   // a spread T of depths on that grid (a median over pixels of per-pixel spreads jumps between
   // the few values a spread of a handful of quantized depths can take).
   enum Quantum { kNone, kDisparityStep, kPixel, kRelativeStep } quantum;
+  // Decided by the region's window: it moves by steps as pixels enter or leave the window, so
+  // every simulation is a fresh draw of those steps (a candidate's surface is smoothed along
+  // its parameters in these metrics, smooth.h).
+  bool window = false;
 };
 const MetricInfo& InfoOf(int metric);
 // The metric of a row, transformed; NaN where the row does not have it.

@@ -45,7 +45,7 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
     std::vector<std::vector<double>> axes;
     for (const Axis& a : s.candidate.axes) {
       std::vector<double> c;
-      for (double v : a.nodes) c.push_back(a.log_scale ? std::log(v) : v);
+      for (double v : a.nodes) c.push_back(Coordinate(a, v));
       axes.push_back(c);
     }
     coords_.push_back(axes);
@@ -109,7 +109,7 @@ int GapModel::Group(const Term& t, int cell) const {
 }
 
 double GapModel::ToCoord(int candidate, int axis, double value) const {
-  return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::log(value) : value;
+  return Coordinate(sims_.surfaces[candidate].candidate.axes[axis], value);
 }
 
 double GapModel::FromCoord(int candidate, int axis, double coord) const {

@@ -6,7 +6,6 @@
 #include <stdexcept>
 
 namespace depthbias::gap {
-namespace {
 
 double MedianAbs(std::vector<double> v) {
   for (double& x : v) x = std::fabs(x);
@@ -16,8 +15,6 @@ double MedianAbs(std::vector<double> v) {
   if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + mid));
   return m;
 }
-
-}  // namespace
 
 double NoiseEstimate::Of(const Design& d, const Simulations& s, int cell, int k) const {
   const double z = s.depth_m[cell];

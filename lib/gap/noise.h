@@ -32,6 +32,9 @@ namespace depthbias::gap {
 
 constexpr int kMinReplicatePairs = 6;
 
+// The median of |v| (0.5·(a + b) of the middle two for an even count); v must not be empty.
+double MedianAbs(std::vector<double> v);
+
 // The emitter mismatch of one group of twins (a scenario at one distance): the mean over its
 // test points of (real on − real off) − (sim on − sim off), in the metric's unit.
 struct EmitterGap {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "common/hash.h"
+#include "gap/smooth.h"
 
 namespace depthbias::gap {
 namespace {
@@ -211,6 +212,7 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
     for (size_t i = 0; i < obs; ++i) FillGaps(shape, &surf.table[i * surf.num_nodes]);
     s.surfaces.push_back(std::move(surf));
   }
+  SmoothSurfaces(d, &s);
   return s;
 }
 

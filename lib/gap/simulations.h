@@ -56,7 +56,9 @@ struct Simulations {
   std::vector<double> shifted;          // [obs] the base, panels moved sideways (shift_px)
   std::vector<double> moved;            // [obs] the base, panels placed further (moved_rel)
   double moved_rel = 0;                 // by this share of their distance
-  std::vector<Surface> surfaces;        // one per candidate, in the candidates' order
+  std::vector<Surface> surfaces;        // one per candidate, in the candidates' order; the
+                                        // window's metrics smoothed along continuous axes
+                                        // (smooth.h)
   int runs = 0;                         // simulations of the whole table
 
   bool Matches(const Design& design) const;

@@ -20,6 +20,7 @@
 #include "gap/placement.h"
 #include "gap/select.h"
 #include "gap/simulations.h"
+#include "gap/smooth.h"
 #include "gap/unexplained.h"
 #include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
@@ -584,6 +585,113 @@ TEST(Shrink, IsTheShareOfTheGapBeyondTheNoise) {
   EXPECT_NEAR(Shrink(stat(5.0), stat(7.0)), -50.0, 1e-9);  // a model that widens the gap
   EXPECT_TRUE(std::isnan(Shrink(stat(1.0), stat(0.8))));  // no gap to shrink
   EXPECT_TRUE(std::isnan(Shrink(stat(0.9), stat(0.8))));
+}
+
+// A surface row along a parameter: the smooth keeps a response larger than the nodes' scatter
+// (the median along an offset, curved towards its pole), takes the trend through draws of the
+// scatter's size (a width jumping by whole pixels), and never moves the neutral node.
+TEST(Smooth, KeepsAResponseAndTakesTheTrendThroughDraws) {
+  const std::vector<double> x = {-1, -0.5, -0.25, -0.1, -0.04, 0, 0.04, 0.1, 0.25, 0.5, 1};
+  const int n = static_cast<int>(x.size());
+  const int neutral = 5;
+  // The median's response at 16 m: Z' − Z with Z' = Z / (1 + δ·Z / fB), fB = 58 px·m.
+  auto response = [](double d) { return 16.0 / (1 + d * 16.0 / 58.0) - 16.0; };
+  std::vector<double> y(n);
+  for (int j = 0; j < n; ++j) y[j] = response(x[j]);
+  std::vector<double> kept = y;
+  SmoothAlong(x.data(), kept.data(), n, neutral, 0.01);
+  for (int j = 0; j < n; ++j) EXPECT_NEAR(kept[j], y[j], 0.05) << "node " << x[j];
+  EXPECT_EQ(kept[neutral], y[neutral]);
+
+  // A trend of 2 % per px with draws of σ = 0.01 about it (seed 9101): over 200 rows the smooth
+  // is nearer the trend than the nodes, and the neutral node stays.
+  std::mt19937 rng(9101);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  double raw_sq = 0, smooth_sq = 0;
+  for (int row = 0; row < 200; ++row) {
+    std::vector<double> v(n), truth(n);
+    for (int j = 0; j < n; ++j) {
+      truth[j] = 1.0 - 0.02 * x[j];
+      v[j] = truth[j] + (j == neutral ? 0.0 : noise(rng));
+    }
+    const double at_neutral = v[neutral];
+    for (int j = 0; j < n; ++j) raw_sq += (v[j] - truth[j]) * (v[j] - truth[j]);
+    SmoothAlong(x.data(), v.data(), n, neutral, 0.01);
+    EXPECT_EQ(v[neutral], at_neutral);
+    for (int j = 0; j < n; ++j) smooth_sq += (v[j] - truth[j]) * (v[j] - truth[j]);
+  }
+  EXPECT_LT(smooth_sq, 0.5 * raw_sq);
+  // Told there is no scatter, the nodes stay as they are.
+  std::vector<double> v = {1, 2, 1, 2, 1, 2, 1, 2, 1, 2, 1};
+  const std::vector<double> before = v;
+  SmoothAlong(x.data(), v.data(), n, neutral, 0.0);
+  EXPECT_EQ(v, before);
+}
+
+// Only the window's metrics are smoothed: a disparity offset's surface whose every metric is a
+// trend plus draws (seed 4242) keeps its median, spreads and valid share node for node, while
+// its width comes nearer the trend, and the node at the offset's neutral value stays the base.
+TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
+  std::vector<records::PanelMetrics> rows;
+  for (double dist : {4.0, 8.0, 12.0, 16.0})
+    for (double angle : {0.0, 20.0})
+      for (const char* emitter : {"off", "on"}) {
+        rows.push_back(Row(dist, angle, "HA", emitter));
+        rows.back().temporal_std_m = 0.01;
+        rows.back().normal_tilt_deg = angle;
+        rows.back().panel_width_m = 1.0;
+      }
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  ASSERT_EQ(d.num_metrics(), kNumMetrics);
+  Simulations s;
+  s.metrics = d.metrics;
+  const int kk = d.num_metrics();
+  s.base.assign(d.real.size(), 0.0);
+  for (int c = 0; c < d.num_cells(); ++c) s.depth_m.push_back(d.cells[c].distance_m);
+  Candidate offset;
+  for (const Candidate& c : DefaultCandidates())
+    if (c.effect == "disparity_offset") offset = c;
+  ASSERT_EQ(offset.axes.size(), 1u);
+  const Axis& axis = offset.axes[0];
+  const int n = static_cast<int>(axis.nodes.size());
+  int neutral = -1;
+  for (int j = 0; j < n; ++j)
+    if (IsNeutral(offset, {axis.nodes[j]})) neutral = j;
+  ASSERT_GE(neutral, 0);
+  Surface surf;
+  surf.candidate = offset;
+  surf.num_nodes = n;
+  surf.table.assign(d.real.size() * n, 0.0);
+  std::mt19937 rng(4242);
+  std::normal_distribution<double> draw(0.0, 1.0);
+  std::vector<double> trend(surf.table.size());
+  for (int c = 0; c < d.num_cells(); ++c)
+    for (int k = 0; k < kk; ++k)
+      for (int j = 0; j < n; ++j) {
+        const size_t i = (static_cast<size_t>(c) * kk + k) * n + j;
+        const double scale = NoiseShape(d.metrics[k], s.depth_m[c]) * 0.01;
+        trend[i] = 0.05 * axis.nodes[j] * scale * 100;
+        surf.table[i] = trend[i] + (j == neutral ? 0.0 : scale * draw(rng));
+      }
+  s.surfaces.push_back(surf);
+  SmoothSurfaces(d, &s);
+  double raw_sq = 0, smooth_sq = 0;
+  for (int c = 0; c < d.num_cells(); ++c)
+    for (int k = 0; k < kk; ++k)
+      for (int j = 0; j < n; ++j) {
+        const size_t i = (static_cast<size_t>(c) * kk + k) * n + j;
+        if (!InfoOf(d.metrics[k]).window || j == neutral) {
+          EXPECT_EQ(s.surfaces[0].table[i], surf.table[i]) << InfoOf(d.metrics[k]).name;
+          continue;
+        }
+        if (d.metrics[k] != kPanelWidth) continue;
+        raw_sq += (surf.table[i] - trend[i]) * (surf.table[i] - trend[i]);
+        smooth_sq += (s.surfaces[0].table[i] - trend[i]) * (s.surfaces[0].table[i] - trend[i]);
+      }
+  EXPECT_GT(raw_sq, 0);
+  EXPECT_LT(smooth_sq, 0.7 * raw_sq);
 }
 
 TEST(Json, EscapesAndWritesNullForNonFinite) {

@@ -347,12 +347,14 @@ void ExpectIntervalOverFolds(const std::string& json, bool widened) {
 // Cases that pass at four or five of the seeds 1–5 (docs/gap/cases.md, "Over five seeds"), at
 // two of those seeds, run as scripts/gap_cases.sh runs them (the tables at S + 999 + index, the
 // diagnosis at S, 10 frames a cell): among them one where an extra effect rode beside the right
-// one until each had to carry its own part (--min-own-shrink: panel_tilt small), one the
-// calibration cannot be told from without naming it (invalidation_gain small: "one of", or
-// nothing), one outside the registry (a far over-read from 12 m on, which the median's rest
-// names as a step from 12 m), and a projector that adds no texture (emitter_gain large, at 0,
+// one until each had to carry its own part (--min-own-shrink: panel_tilt small), two the
+// calibration cannot be told from without naming them (invalidation_gain small, temporal_drift
+// small: "one of", or nothing), and a projector that adds no texture (emitter_gain large, at 0,
 // the grid's edge and the gain's own bound). A case that passes at two or three seeds of five is
-// not guarded: its outcome at one seed is a draw, not the capability. Five tables without an
+// not guarded: its outcome at one seed is a draw, not the capability. No case outside the
+// registry passes at four seeds of five since the window's metrics are smoothed along the
+// candidates' parameters (the far over-read from 12 m on: 2 of 5, a disparity offset kept in
+// its place at three; lib/gap/README.md, Limits). Five tables without an
 // effect (seeds 2000–2004) must select nothing. Beside them, at seed 1, a 6 % depth scale must
 // be named by at least three of the four outer folds and nothing else kept; where the whole
 // table keeps it, its interval holds the injected size (it is kept below it: a pass needs 20 %).
@@ -375,8 +377,8 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
   };
   const auto guarded = {"disparity_offset large", "range_vs_depth large",
                         "radial_disparity_residual small", "panel_tilt small",
-                        "invalidation_gain small", "temporal_drift large",
-                        "far over-read of 0.5 m from 12 m on (outside)", "emitter_gain large"};
+                        "invalidation_gain small", "temporal_drift small",
+                        "temporal_drift large", "emitter_gain large"};
   for (const std::uint64_t seed : {1, 3}) {
     sim::SimParams at = base;
     at.seed = seed;

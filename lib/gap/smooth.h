@@ -1,0 +1,45 @@
+#pragma once
+// A candidate's surface along a continuous parameter, in the metrics the region's window decides
+// (mean − median, tilt, width: MetricInfo::window), as smooth as its simulations' own scatter
+// allows. Each node of a candidate's grid is a simulation of its own, and those metrics take a
+// fresh draw of the window's steps at every node: the window is the panel's known size laid on
+// the measured plane, so its width in whole pixels follows the measured depth in steps
+// (panel_width_m jumps by ±2 % from one offset node to the next at 16 m), and the plane fit's
+// tilt at 16 m scatters by about a degree between nodes. A fit that interpolated through those
+// draws would follow them along the parameter as if they were the effect's: on a user's unit of
+// 32 rows with a −0.25 px offset, all seven metrics fitted −0.187 and −0.157 px at seeds 2 and 3
+// where the median alone reads −0.235 and −0.270. A camera's own window steps with its measured
+// depth too, but at a placement no table knows, so what a model can predict of them is their
+// trend. The other metrics (median, spreads, valid share) respond to an effect far beyond that
+// scatter and keep their nodes.
+//
+// The scatter of one node: every interior node of a continuous axis against the line through
+// its two neighbours (variance σ²·(1 + w₁² + w₂²)), robust (1.4826 · median |r|) per candidate
+// and metric, in the metric's noise shape (design.h), with the metric's quantization (a window
+// one pixel wider or narrower) in quadrature. Each row of a surface along a continuous axis is
+// then the penalized smooth (second divided differences) whose strength minimizes the unbiased
+// risk estimate at that scatter: where the response is larger than the scatter, the smooth keeps
+// the nodes; where it is a draw, it takes the trend. The neutral node stays the base, so that a
+// candidate at its neutral value is the calibrated base.
+
+#include <vector>
+
+#include "gap/design.h"
+#include "gap/simulations.h"
+
+namespace depthbias::gap {
+
+// Per compared metric: the scatter of one node of this surface at Z = 10 m, in its unit (0 where
+// the metric is not a window's or the surface has too few interior nodes along a continuous axis).
+std::vector<double> NodeScatter(const Design& design, const Surface& surface,
+                                const Simulations& sims);
+
+// Smooths y[0..n) given at ascending x with noise sigma per node; y[pinned] is kept (−1: none).
+// Fewer than four nodes, or sigma ≤ 0: unchanged.
+void SmoothAlong(const double* x, double* y, int n, int pinned, double sigma);
+
+// Every candidate's surface smoothed along its continuous axes with its own NodeScatter, in the
+// window's metrics.
+void SmoothSurfaces(const Design& design, Simulations* sims);
+
+}  // namespace depthbias::gap
