@@ -28,6 +28,7 @@ std::vector<Candidate> MakeCandidates() {
                {Continuous("scale_rel", {-0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12},
                            0, 0.02)}});
   c.push_back({"range_vs_depth", {Continuous("weight", {0, 0.15, 0.4, 0.7, 1.0}, 0, 0.5)}});
+  for (Candidate& law : c) law.range_law = true;  // the three above
   c.push_back({"radial_disparity_residual",
                {Continuous("k_px", {-1.5, -0.6, -0.25, -0.08, 0, 0.08, 0.25, 0.6, 1.5}, 0, 0.3)}});
   Axis noise = Continuous("gain", {0.4, 0.6, 0.8, 1, 1.2, 1.45, 1.8, 2.5}, 1, 1.5);

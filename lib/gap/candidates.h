@@ -34,6 +34,9 @@ inline double Coordinate(const Axis& axis, double value) {
 struct Candidate {
   std::string effect;      // registry name
   std::vector<Axis> axes;  // one or two
+  // A law of the range the camera reads (its signature is the median bias: an offset's ∝ Z², a
+  // scale's ∝ Z, range read for depth growing off axis): smooth in distance, never a step.
+  bool range_law = false;
   bool IsValid(std::string* why) const;
 };
 
