@@ -114,7 +114,11 @@ class GapModel {
   Whitening Whiten(const std::vector<size_t>& obs) const;
   const std::vector<double>& dispersion() const { return phi_; }
   void SetDispersion(const std::vector<double>& phi) { phi_ = phi; }
-  const Surface& surface(int candidate) const { return sims_.surfaces[candidate]; }
+  // A candidate's surface as the fits read it: the simulations' own, a range law's window
+  // metrics averaged over the placement scatter's law (smooth.h: AverageOverPlacement).
+  const Surface& surface(int candidate) const {
+    return own_of_[candidate] < 0 ? sims_.surfaces[candidate] : own_[own_of_[candidate]];
+  }
 
   // The calibration components a candidate duplicates (bit 0: σ_d, bit 1: hole probability):
   // its signature lies along them (disparity_noise_gain is a σ_d change, invalidation_gain one
@@ -148,6 +152,8 @@ class GapModel {
   std::vector<char> valid_;
   std::vector<std::vector<std::vector<double>>> coords_;  // [candidate][axis][node]
   std::vector<int> absorbs_;                               // [candidate]
+  std::vector<Surface> own_;  // the surfaces averaged over placement
+  std::vector<int> own_of_;   // [candidate] its index in own_, −1: the simulations'
 };
 
 // Fits the terms (with their discrete nodes fixed) and the calibration on the marked cells,

@@ -8,6 +8,8 @@
 
 #include <Eigen/Dense>
 
+#include "gap/smooth.h"
+
 namespace depthbias::gap {
 
 bool FitSettings::IsValid(std::string* why) const {
@@ -40,6 +42,22 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
       if (blocks) block_[o] = placement->point[c];
       valid_[o] = std::isfinite(y_[o]) && std::isfinite(sims.base[o]) && sigma_[o] > 0 &&
                   std::isfinite(total_[o]);
+    }
+  // The median's placement law, relative to distance, at each cell: the width of a range law's
+  // average over where the panel may stand.
+  std::vector<double> rel(design.num_cells(), 0.0);
+  const auto kmed = std::find(design.metrics.begin(), design.metrics.end(), kMedianBias);
+  if (blocks && kmed != design.metrics.end())
+    for (int c = 0; c < design.num_cells(); ++c) {
+      const double dist = design.cells[c].distance_m;
+      rel[c] = placement->Law(static_cast<int>(kmed - design.metrics.begin()), kMedianBias, dist) /
+               dist;
+    }
+  own_of_.assign(sims.surfaces.size(), -1);
+  for (size_t i = 0; i < sims.surfaces.size(); ++i)
+    if (blocks && sims.surfaces[i].candidate.range_law) {
+      own_of_[i] = static_cast<int>(own_.size());
+      own_.push_back(AverageOverPlacement(design, sims, sims.surfaces[i], rel));
     }
   for (const Surface& s : sims.surfaces) {
     std::vector<std::vector<double>> axes;
@@ -117,7 +135,7 @@ double GapModel::FromCoord(int candidate, int axis, double coord) const {
 }
 
 double GapModel::Delta(const Term& term, const double* u, size_t obs) const {
-  const Surface& s = sims_.surfaces[term.candidate];
+  const Surface& s = surface(term.candidate);
   const auto& axes = coords_[term.candidate];
   const double* row = &s.table[obs * s.num_nodes];
   double value;

@@ -159,4 +159,58 @@ void SmoothSurfaces(const Design& d, Simulations* s) {
   }
 }
 
+Surface AverageOverPlacement(const Design& d, const Simulations& s, const Surface& surface,
+                             const std::vector<double>& rel_of_cell) {
+  Surface out = surface;
+  const Candidate& cand = surface.candidate;
+  const int kk = d.num_metrics();
+  const auto kmed = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
+  if (!cand.range_law || kmed == d.metrics.end()) return out;
+  const int km = static_cast<int>(kmed - d.metrics.begin());
+  ForEachLine(surface, [&](int origin, int stride, const Axis& axis) {
+    const int n = static_cast<int>(axis.nodes.size());
+    int pinned = -1;
+    for (int j = 0; j < n && pinned < 0; ++j)
+      if (cand.axes.size() == 1 && IsNeutral(cand, {axis.nodes[j]})) pinned = j;
+    if (pinned < 0) return;  // a line off the neutral value: nothing to keep it to
+    std::vector<double> zm(n), w(static_cast<size_t>(n) * n);
+    for (int c = 0; c < d.num_cells(); ++c) {
+      const double rel = c < static_cast<int>(rel_of_cell.size()) ? rel_of_cell[c] : 0.0;
+      if (!(rel > 0)) continue;
+      const double* med = &surface.table[(static_cast<size_t>(c) * kk + km) * surface.num_nodes];
+      bool finite = true;
+      for (int j = 0; j < n; ++j) {
+        zm[j] = s.depth_m[c] + med[origin + j * stride];
+        finite = finite && std::isfinite(zm[j]) && zm[j] > 0;
+      }
+      if (!finite) continue;
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const double u = (zm[i] - zm[j]) / (rel * zm[j]);
+          w[static_cast<size_t>(j) * n + i] = std::exp(-0.5 * u * u);
+        }
+      for (int k = 0; k < kk; ++k) {
+        if (!InfoOf(d.metrics[k]).window) continue;
+        const double* in = &surface.table[(static_cast<size_t>(c) * kk + k) * surface.num_nodes];
+        double* row = &out.table[(static_cast<size_t>(c) * kk + k) * surface.num_nodes];
+        std::vector<double> avg(n);
+        bool ok = true;
+        for (int j = 0; j < n; ++j) {
+          double sw = 0, sy = 0;
+          for (int i = 0; i < n; ++i) {
+            sw += w[static_cast<size_t>(j) * n + i];
+            sy += w[static_cast<size_t>(j) * n + i] * in[origin + i * stride];
+          }
+          avg[j] = sy / sw;
+          ok = ok && std::isfinite(avg[j]);
+        }
+        if (!ok) continue;
+        const double keep = in[origin + pinned * stride] - avg[pinned];
+        for (int j = 0; j < n; ++j) row[origin + j * stride] = avg[j] + keep;
+      }
+    }
+  });
+  return out;
+}
+
 }  // namespace depthbias::gap

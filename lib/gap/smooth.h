@@ -42,4 +42,19 @@ void SmoothAlong(const double* x, double* y, int n, int pinned, double sigma);
 // window's metrics.
 void SmoothSurfaces(const Design& design, Simulations* sims);
 
+// A range law's surface (Candidate::range_law) with its window metrics averaged over where the
+// panel may stand. A range law moves the window only through the measured depth, and the window's
+// whole pixels follow the measured depth as a sawtooth of period about Z²/(f·size) (one pixel of
+// the panel's width: 2.5 % of the distance at 16 m). A surface simulated at the nominal distance
+// reads that sawtooth at one phase; a camera's panel, placed off by the test point's placement
+// scatter, reads it at another, and a table of placed panels shows its mean. On a user's unit of
+// 32 rows with a −0.25 px offset, the nominal surface read the width 1.2–1.5 % wider at 16 m,
+// the same table with its panels at their nominal distances 1.5 % wider, and with them placed
+// (2 % of distance) 0.4 % narrower; the fit took the nominal phase as the offset's and read
+// −0.13 to −0.20 px. Each node is the Gaussian mean over the line's nodes in measured depth
+// (distance + the node's median bias), of width rel_of_cell[c] × that depth; the neutral node
+// keeps its value. Other candidates and metrics are returned as they are.
+Surface AverageOverPlacement(const Design& design, const Simulations& sims,
+                             const Surface& surface, const std::vector<double>& rel_of_cell);
+
 }  // namespace depthbias::gap
