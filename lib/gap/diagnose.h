@@ -81,7 +81,7 @@ struct DiagnoseParams {
   // removes almost nothing of its own. Chosen like the floor above: at seed 7 the right effects
   // kept carried 18–100 % on their own, the extras beside them 0–5.4 %. Each fold weighs alike:
   // pooled over the folds, the one of the largest gap decided alone (a user's field bags, whose
-  // emitter holds their gap at 4 m, kept their −0.25 px offset out at 3.6–6.2 % pooled, 47 %
+  // emitter holds their gap at 4 m, kept their −0.25 px offset out at 3.6–6.2 % pooled, 45–52 %
   // as a mean over the folds).
   double min_own_shrink_pct = 10;
 

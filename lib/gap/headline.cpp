@@ -51,7 +51,40 @@ std::string Headline(const DiagnoseResult& r) {
     int beyond = 0;
     for (const Unexplained& u : r.unexplained)
       beyond += u.metric == "median_bias_m" && u.beyond_placement_law;
-    o << "range: the simulator" << (r.steps.empty() ? "" : " with the selected effects")
+    o << "range: ";
+    // The median's gap in metres at the far distance before any effect: each test point's mean
+    // of real − base over its recordings, then their mean and its 95 % interval.
+    const int kk = r.design.num_metrics();
+    double far = 0;
+    for (const sim::Cell& c : r.design.cells) far = std::max(far, c.distance_m);
+    std::vector<double> point_sum(std::max(0, pe.num_points), 0.0), point_n(point_sum.size(), 0);
+    for (int c = 0; c < r.design.num_cells(); ++c) {
+      const size_t at = static_cast<size_t>(c) * kk + km;
+      if (r.design.cells[c].distance_m != far || at >= r.sim_base.size() || pe.empty()) continue;
+      const double d = r.design.real[at] - r.sim_base[at];
+      const int t = pe.point[c];
+      if (!std::isfinite(d) || t < 0 || t >= static_cast<int>(point_sum.size())) continue;
+      point_sum[t] += d;
+      point_n[t] += 1;
+    }
+    std::vector<double> means;
+    for (size_t t = 0; t < point_sum.size(); ++t)
+      if (point_n[t] > 0) means.push_back(point_sum[t] / point_n[t]);
+    if (!means.empty()) {
+      double mean = 0, ss = 0;
+      for (double m : means) mean += m;
+      mean /= static_cast<double>(means.size());
+      for (double m : means) ss += (m - mean) * (m - mean);
+      o << "at " << Num(far) << " m the camera " << Direction(mean) << " by "
+        << Num(std::fabs(mean), 2) << " m";
+      if (means.size() >= 2)
+        o << " (95 % ± "
+          << Num(1.96 * std::sqrt(ss / static_cast<double>(means.size() - 1) /
+                                  static_cast<double>(means.size())), 2)
+          << " m over " << means.size() << " test points)";
+      o << "; ";
+    }
+    o << "the simulator" << (r.steps.empty() ? "" : " with the selected effects")
       << " reproduces the camera's median range within noise and placement scatter";
     if (beyond > 0)
       o << ", but for " << beyond << " test point" << (beyond > 1 ? "s" : "")

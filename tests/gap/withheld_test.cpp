@@ -3,7 +3,7 @@
 // distance, effects withheld from the base model, judged by the strict criteria on the gap.json
 // the diagnosis writes. scripts/gap_cases.sh prints every case with pass yes/no
 // (docs/gap/cases.md); this binary asserts the criteria themselves (each broken on purpose),
-// how the tables are made, and that six of the cases passing at four or five seeds of five keep
+// how the tables are made, and that ten of the cases passing at four or five seeds of five keep
 // passing at two of them, with five null tables.
 #include <gtest/gtest.h>
 
@@ -17,6 +17,10 @@
 #include <vector>
 
 #include "gap/cases.h"
+#include "gap/design.h"
+#include "gap/diagnose.h"
+#include "gap/report.h"
+#include "io/metrics_csv.h"
 #include "support/article.h"
 
 namespace depthbias::gap {
@@ -345,13 +349,14 @@ void ExpectIntervalOverFolds(const std::string& json, bool widened) {
 }
 
 // The open world before a registered cause: a far over-read of 0.5 m from 12 m on (no registered
-// effect is a step in distance) at the seed where, once the window's metrics were smoothed, a
-// disparity offset of −0.18 px was kept in its place (seed 2). The calibrated base's median bias
-// departs as a step from 12 m, so no range law is kept; the step is what `unexplained` names.
-// Without that rule this case selects disparity_offset and fails.
+// effect is a step in distance) at a seed where a disparity offset passes the outer folds' guards
+// and would be kept in its place (seed 5; at seed 2, where it was kept once the window's metrics
+// were smoothed, the guards now drop it themselves). The calibrated base's median bias departs
+// as a step from 12 m, so no range law is kept; the step is what `unexplained` names. Without
+// that rule this case selects disparity_offset and fails.
 TEST(Cases, AFarStepIsNotPinnedOnARangeLaw) {
   sim::SimParams at = Base();
-  at.seed = 2;
+  at.seed = 5;
   DiagnoseParams params;
   params.simulate.threads = 2;
   const std::vector<WithheldCase> cases = DefaultWithheldCases();
@@ -360,11 +365,47 @@ TEST(Cases, AFarStepIsNotPinnedOnARangeLaw) {
     if (cases[i].name == "far over-read of 0.5 m from 12 m on (outside)")
       only.push_back(static_cast<int>(i));
   ASSERT_EQ(only.size(), 1u);
-  const std::vector<CaseOutcome> out = RunWithheldCases(at, cases, params, 2 + 999, only);
+  const std::vector<CaseOutcome> out = RunWithheldCases(at, cases, params, 5 + 999, only);
   ASSERT_EQ(out.size(), 1u);
   EXPECT_TRUE(out[0].selected.empty()) << out[0].why;
   EXPECT_TRUE(out[0].pass) << out[0].why;
   EXPECT_NE(out[0].gap_json.find("which no range law gives"), std::string::npos);
+}
+
+// A user's own unit recorded by a renderer that is not the simulator's: 32 bags of field scenes
+// (scripts/make_field_campaign.py --seed 11: a disparity offset of −0.25 px, every test point
+// placed off by 2 % of its distance, a projector that adds no texture) through panel_extract
+// (tests/data/field_unit_seed11.csv), diagnosed as the tool diagnoses any table. Its offset was
+// not kept while an effect's own part was pooled over the outer folds (3.6 %, the emitter's gap
+// at 4 m weighing most): the test fails that way. The emitter's valid share at 4 m holds
+// most of the gap; the offset must still be kept on its own part in each held-out distance,
+// its size within 20 %, and the emitter gain named at 0: the field case's own criteria.
+TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
+  const std::string csv = DEPTHBIAS_SOURCE_DIR "/tests/data/field_unit_seed11.csv";
+  std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(csv);
+  ASSERT_EQ(rows.size(), 32u);
+  const sim::SimParams base = Base();
+  ScreenRows(DesignRulesOf(base.sensor), &rows);
+  DiagnoseParams params;
+  params.simulate.threads = 2;
+  const DiagnoseResult r = Diagnose(rows, base, params);
+  ASSERT_TRUE(r.success) << r.message;
+  const std::string json = GapJson(r, params, ReportContext{"field_unit_seed11.csv", "", "", "",
+                                                            base.seed, "test"});
+  const CaseOutcome o = JudgeCase(json, FieldCampaignCase(), rows);
+  // The summary's first line, for a safety engineer: the range error in metres and its
+  // direction before any effect. At 16 m a −0.25 px offset reads 1.1 m far on the axis and
+  // 0.77 m at 35° (depth 13.1 m), each test point placed off by its own 2 %.
+  const std::string summary = GapSummary(r);
+  const std::string head = "range: at 16 m the camera reads farther than the simulator: "
+                           "over-reads (the dangerous direction) by ";
+  ASSERT_EQ(summary.rfind(head, 0), 0u) << summary;
+  const double metres = std::atof(summary.c_str() + head.size());
+  EXPECT_GT(metres, 0.7) << summary;
+  EXPECT_LT(metres, 1.2) << summary;
+  std::string recovered;
+  for (const auto& [effect, size] : o.recovered) recovered += effect + ": " + size + "; ";
+  EXPECT_TRUE(o.pass) << o.why << "\n" << recovered;
 }
 
 // Cases that pass at four or five of the seeds 1–5 (docs/gap/cases.md, "Over five seeds"), at
@@ -375,7 +416,8 @@ TEST(Cases, AFarStepIsNotPinnedOnARangeLaw) {
 // small: "one of", or nothing), one outside the registry (a far over-read from 12 m on, which
 // the median's rest names as a step from 12 m, and which no range law may take: above), and a
 // projector that adds no texture (emitter_gain large, at 0, the grid's edge and the gain's own
-// bound). A case that passes at two or three seeds of five is not guarded: its outcome at one
+// bound), and a user's unit of 32 rows (its offset read −0.133 px at seed 3 for −0.25 until a
+// range law's window metrics were averaged over placement: lib/gap/smooth.h). A case that passes at two or three seeds of five is not guarded: its outcome at one
 // seed is a draw, not the capability. Five tables without an
 // effect (seeds 2000–2004) must select nothing. Beside them, at seed 1, a 6 % depth scale must
 // be named by at least three of the four outer folds and nothing else kept; where the whole
@@ -401,7 +443,8 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
                         "radial_disparity_residual small", "panel_tilt small",
                         "invalidation_gain small", "temporal_drift small",
                         "temporal_drift large",
-                        "far over-read of 0.5 m from 12 m on (outside)", "emitter_gain large"};
+                        "far over-read of 0.5 m from 12 m on (outside)", "emitter_gain large",
+                        "unit: daylight HA, 32 rows, disparity_offset -0.25 px"};
   for (const std::uint64_t seed : {1, 3}) {
     sim::SimParams at = base;
     at.seed = seed;
