@@ -628,10 +628,8 @@ TEST(Smooth, KeepsAResponseAndTakesTheTrendThroughDraws) {
   EXPECT_EQ(v, before);
 }
 
-// Only the window's metrics are smoothed: a disparity offset's surface whose every metric is a
-// trend plus draws (seed 4242) keeps its median, spreads and valid share node for node, while
-// its width comes nearer the trend, and the node at the offset's neutral value stays the base.
-TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
+// A daylight/HA table at 4–16 m, 0° and 20°, both emitter states, with every metric.
+std::vector<records::PanelMetrics> SmoothRows() {
   std::vector<records::PanelMetrics> rows;
   for (double dist : {4.0, 8.0, 12.0, 16.0})
     for (double angle : {0.0, 20.0})
@@ -641,9 +639,16 @@ TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
         rows.back().normal_tilt_deg = angle;
         rows.back().panel_width_m = 1.0;
       }
+  return rows;
+}
+
+// Only the window's metrics are smoothed: a disparity offset's surface whose every metric is a
+// trend plus draws (seed 4242) keeps its median, spreads and valid share node for node, while
+// its width comes nearer the trend, and the node at the offset's neutral value stays the base.
+TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
   Design d;
   std::string why;
-  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  ASSERT_TRUE(BuildDesign(SmoothRows(), &d, &why)) << why;
   ASSERT_EQ(d.num_metrics(), kNumMetrics);
   Simulations s;
   s.metrics = d.metrics;
@@ -701,18 +706,9 @@ TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
 // within half the raw nodes' error of it. The median and the neutral node stay as simulated, a
 // candidate that is not a range law and a table without placement scatter are left alone.
 TEST(Smooth, ARangeLawsWindowIsAveragedOverPlacement) {
-  std::vector<records::PanelMetrics> rows;
-  for (double dist : {4.0, 8.0, 12.0, 16.0})
-    for (double angle : {0.0, 20.0})
-      for (const char* emitter : {"off", "on"}) {
-        rows.push_back(Row(dist, angle, "HA", emitter));
-        rows.back().temporal_std_m = 0.01;
-        rows.back().normal_tilt_deg = angle;
-        rows.back().panel_width_m = 1.0;
-      }
   Design d;
   std::string why;
-  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  ASSERT_TRUE(BuildDesign(SmoothRows(), &d, &why)) << why;
   Simulations s;
   s.metrics = d.metrics;
   const int kk = d.num_metrics();
