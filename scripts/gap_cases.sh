@@ -2,7 +2,7 @@
 # The withheld cases of the gap diagnosis as a table, judged by the strict criteria
 # (lib/gap/cases.h, docs/gap/cases.md): every test point placed off by 2 % of its distance, then
 # every registered effect at two sizes, a sunset-only disparity offset, offset + drift,
-# offset + scale, an offset at the noise floor, two effects outside the registry, a user's unit
+# offset + scale, an offset at the noise floor, effects outside the registry, a user's unit
 # of 32 rows (simulated), a user's unit recorded as field bags (scripts/make_field_campaign.py,
 # through panel_extract), and 20 tables without effect. A case passes only when the selected set
 # equals the injected set (outside the registry: nothing selected, `unexplained` names the right

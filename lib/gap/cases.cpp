@@ -119,6 +119,19 @@ std::vector<WithheldCase> DefaultWithheldCases() {
   // adds nothing (a sunlit pattern, or a renderer without one); small: a fifth less texture.
   cases.push_back(Registry("emitter_gain", "small", {{"gain", 0.8}}));
   cases.push_back(Registry("emitter_gain", "large", {{"gain", 0}}));
+  // Added after the step rule (no range law where the median departs as a step), to test it
+  // and the open world on steps it was not built on: one from 8 m on (three distances of four
+  // move alike, a constant beside 4 m) and one at the far distance alone.
+  for (const double from : {8.0, 16.0}) {
+    c = WithheldCase();
+    c.name = from == 16 ? "far over-read of 0.5 m at 16 m only (outside)"
+                        : "far over-read of 0.5 m from 8 m on (outside)";
+    c.family = "outside";
+    c.outside.kind = OutsideEffect::kFarStep;
+    c.outside.coef = 0.5;
+    c.outside.from_distance_m = from;
+    cases.push_back(c);
+  }
   return cases;
 }
 

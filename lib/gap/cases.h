@@ -70,8 +70,9 @@ struct WithheldCase {
 
 // The strict suite: every registered effect at two sizes, a sunset-only disparity offset,
 // offset + drift, offset + scale, a disparity offset no larger than one far test point's
-// placement scatter, two effects outside the registry, a user's unit with a disparity offset
-// (all under 2 % placement scatter).
+// placement scatter, effects outside the registry (a far over-read ∝ D², one test point read
+// far, over-reads from 12 m on, from 8 m on and at 16 m alone), a user's unit with a disparity
+// offset, the projector's texture scaled (all under 2 % placement scatter).
 std::vector<WithheldCase> DefaultWithheldCases();
 // A user's campaign recorded as bags of field scenes (scripts/make_field_campaign.py: daylight,
 // HA, 16 test points × emitter off/on, each disparity read −0.25 px too large), measured by
