@@ -372,6 +372,28 @@ TEST(Cases, AFarStepIsNotPinnedOnARangeLaw) {
   EXPECT_NE(out[0].gap_json.find("which no range law gives"), std::string::npos);
 }
 
+// How far a step reaches: a far over-read of 0.5 m from 8 m on (outside the registry, added
+// after the step rule) at seed 1, where the rest's best group is 8 m alone (its noise and
+// placement scatter are the smallest). Nothing is selected, and `unexplained` names every
+// distance from 8 m on with the step's size; named at 8 m alone, the case fails.
+TEST(Cases, AStepIsNamedAsFarAsItReaches) {
+  sim::SimParams at = Base();
+  at.seed = 1;
+  DiagnoseParams params;
+  params.simulate.threads = 2;
+  const std::vector<WithheldCase> cases = DefaultWithheldCases();
+  std::vector<int> only;
+  for (size_t i = 0; i < cases.size(); ++i)
+    if (cases[i].name == "far over-read of 0.5 m from 8 m on (outside)")
+      only.push_back(static_cast<int>(i));
+  ASSERT_EQ(only.size(), 1u);
+  const std::vector<CaseOutcome> out = RunWithheldCases(at, cases, params, 1 + 999, only);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_TRUE(out[0].selected.empty()) << out[0].why;
+  EXPECT_TRUE(out[0].pass) << out[0].why;
+  EXPECT_NE(out[0].gap_json.find("\"distance ≥ 8 m\""), std::string::npos);
+}
+
 // A user's own unit recorded by a renderer that is not the simulator's: 32 bags of field scenes
 // (scripts/make_field_campaign.py --seed 11: a disparity offset of −0.25 px, every test point
 // placed off by 2 % of its distance, a projector that adds no texture) through panel_extract
