@@ -21,8 +21,12 @@ for b in "$APP" "$SIM"; do
 done
 REPEAT=${REPEAT:-3}
 bench_positive_int REPEAT "$REPEAT"
-OUT_DIR=${OUT_DIR:-$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)}
-trap 'rm -rf "$OUT_DIR"' EXIT
+if [ -n "${OUT_DIR:-}" ]; then  # the user's folder: written into, never removed
+  mkdir -p "$OUT_DIR"
+else
+  OUT_DIR=$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)
+  trap 'rm -rf "$OUT_DIR"' EXIT
+fi
 REAL=config/data/paper_d455_outdoor.csv
 
 timed() {  # prints "wall_s cpu_s"

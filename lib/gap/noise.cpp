@@ -16,6 +16,14 @@ double MedianAbs(std::vector<double> v) {
   return m;
 }
 
+double StudentT975(int dof) {
+  static const double kT[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306,
+                              2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120,
+                              2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064,
+                              2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
+  return dof >= 1 && dof <= 30 ? kT[dof - 1] : 1.96;
+}
+
 double NoiseEstimate::Of(const Design& d, const Simulations& s, int cell, int k) const {
   const double z = s.depth_m[cell];
   const double a = scale[k] * NoiseShape(d.metrics[k], z);

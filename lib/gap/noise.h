@@ -35,6 +35,9 @@ constexpr int kMinReplicatePairs = 6;
 // The median of |v| (0.5·(a + b) of the middle two for an even count); v must not be empty.
 double MedianAbs(std::vector<double> v);
 
+// Student's t at 97.5 % for `dof` degrees of freedom (1.96 beyond the table).
+double StudentT975(int dof);
+
 // The emitter mismatch of one group of twins (a scenario at one distance): the mean over its
 // test points of (real on − real off) − (sim on − sim off), in the metric's unit.
 struct EmitterGap {
