@@ -329,19 +329,18 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
     }
   }
   // The open world before a registered cause: where the calibrated base's median bias departs
-  // from some distance on as a step (the rest's form test prefers it over every smooth law in
-  // distance, constant, ∝ D and ∝ D², by more than a parameter's price), no range law explains
-  // it, and one kept there would take an effect the registry does not have for the nearest one
-  // it has (a far over-read of 0.5 m from 12 m on was kept as a −0.18 px offset). The step is
-  // reported in `unexplained` instead.
+  // from some distance on as a step (its shared departure is beyond chance and a step explains
+  // it better than every smooth law in distance, constant, ∝ D and ∝ D², by more than a
+  // parameter's price: MedianStepFrom, read whatever group the rest's search names), no range
+  // law explains it, and one kept there would take an effect the registry does not have for the
+  // nearest one it has (a far over-read of 0.5 m from 12 m on was kept as a −0.18 px offset,
+  // one from 8 m on as a depth scale of 0.04). The step is reported in `unexplained` instead.
   if (!r.steps.empty()) {
     RestParams rp;
     rp.alpha = params.alpha;
-    std::string step;
-    for (const Unexplained& u : DescribeRest(model, model.Predict(m0), r.placement, rp))
-      if (u.metric == InfoOf(kMedianBias).name && u.form.rfind("step from", 0) == 0)
-        step = u.form + " (" + u.where + ")";
-    if (!step.empty()) {
+    const double from = MedianStepFrom(model, model.Predict(m0), r.placement, rp);
+    if (std::isfinite(from)) {
+      const std::string step = "step from " + Num(from) + " m (distance ≥ " + Num(from) + " m)";
       std::vector<char> keep(r.steps.size(), 1);
       for (size_t i = 0; i < r.steps.size(); ++i) {
         if (!sims.surfaces[current.terms[i].term.candidate].candidate.range_law) continue;

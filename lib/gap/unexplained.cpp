@@ -287,6 +287,17 @@ std::string LevelName(const sim::Cell& c, int factor) {
   }
 }
 
+double MedianStepFrom(const GapModel& m, const std::vector<double>& mu,
+                      const PlacementEstimate& pe, const RestParams& params) {
+  const Design& d = m.design();
+  const auto at = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
+  if (at == d.metrics.end() || pe.empty()) return NAN;
+  const int k = static_cast<int>(at - d.metrics.begin());
+  double step_from = NAN;
+  const double p = SharedDepartureP(m, mu, k, MakeBlocks(d, pe), params, &step_from);
+  return p < params.alpha / d.num_metrics() ? step_from : NAN;
+}
+
 std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<double>& mu,
                                       const PlacementEstimate& pe, const RestParams& params) {
   std::vector<Unexplained> out;

@@ -43,4 +43,13 @@ std::vector<Unexplained> DescribeRest(const GapModel& model, const std::vector<d
                                       const PlacementEstimate& placement,
                                       const RestParams& params);
 
+// The median bias's shared departure alone, whatever group DescribeRest names: the first
+// distance of a step (the same departure from there on, none nearer) when the signs test
+// above finds the shared departure beyond chance and a step explains more of it than every
+// smooth law in distance by more than a parameter's price; NaN otherwise. A step found at one
+// distance by the group search is described as a level ("distance 8 m", or "distance ≥ 8 m"),
+// which says nothing of whether a law in distance would do as well.
+double MedianStepFrom(const GapModel& model, const std::vector<double>& mu,
+                      const PlacementEstimate& placement, const RestParams& params);
+
 }  // namespace depthbias::gap
