@@ -20,6 +20,13 @@ int MedianIndex(const DiagnoseResult& r) {
   return -1;
 }
 
+// Why two effects are named "one of": their signatures' correlation, or (NaN) the first no
+// longer earning its parameters beside the second.
+std::string Why(const Ambiguity& a) {
+  if (std::isfinite(a.correlation)) return "r = " + Num(a.correlation);
+  return "by BIC, " + a.effects[0] + " no longer earns beside " + a.effects.back();
+}
+
 std::string Direction(double metres) {
   return metres > 0 ? "reads farther than the simulator: over-reads (the dangerous direction)"
                     : "reads nearer than the simulator: under-reads";
@@ -158,7 +165,7 @@ std::string Headline(const DiagnoseResult& r) {
   for (const Ambiguity& a : r.ambiguous) {
     o << "one of {";
     for (size_t i = 0; i < a.effects.size(); ++i) o << (i ? ", " : "") << a.effects[i];
-    o << "}: cannot be told apart here (r = " << Num(a.correlation) << "); would need";
+    o << "}: cannot be told apart here (" << Why(a) << "); would need";
     for (size_t i = 0; i < a.effects.size(); ++i)
       o << (i ? "; " : " ") << a.effects[i] << " " << a.sizes[i];
     o << "\n";
@@ -298,7 +305,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
   for (const Ambiguity& a : r.ambiguous) {
     o << "- one of {";
     for (size_t i = 0; i < a.effects.size(); ++i) o << (i ? ", " : "") << a.effects[i];
-    o << "} (r = " << Num(a.correlation) << "):";
+    o << "} (" << Why(a) << "):";
     for (size_t i = 0; i < a.effects.size(); ++i)
       o << (i ? ";" : "") << " " << a.effects[i] << " would need " << a.sizes[i];
     o << "\n";
