@@ -20,17 +20,6 @@ std::string Num(double v) {
   return s.str();
 }
 
-// The size of a fitted term as text: "param value" (per scenario: "param v1 / v2 / …").
-std::string SizeText(const Candidate& c, const TermFit& t) {
-  std::string s;
-  for (size_t a = 0; a < c.axes.size(); ++a) {
-    s += (s.empty() ? "" : ", ") + c.axes[a].param + " ";
-    for (size_t g = 0; g < t.values.size(); ++g)
-      s += (g ? " / " : "") + Num(t.values[g][a]);
-  }
-  return s;
-}
-
 }  // namespace
 
 bool DiagnoseParams::IsValid(std::string* why) const {
@@ -204,7 +193,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   r.localization = Localize(design, r.z_base, params.alpha);
 
   // 3. The calibrated base, every candidate alone, forward selection.
-  Selection sel = Select(model, all, fold, r.folds, params);
+  Selection sel = Select(model, r.placement, all, fold, r.folds, params);
   if (!sel.success) {
     r.message = sel.message;
     return r;
@@ -230,30 +219,15 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   r.confounded = sel.confounded;
   r.correlations = sel.correlations;
   r.steps = sel.steps;
+  r.dropped = sel.dropped;
+  r.ambiguous = sel.ambiguous;
+  if (!sel.message.empty()) r.message = sel.message;
   ModelFit current = sel.current;
   HeldOut current_ho = sel.current_ho;
 
-  // Keeps the selected steps marked in `keep` and refits the selection without the others.
   auto keep_only = [&](const std::vector<char>& keep) {
-    std::vector<Term> kept;
-    ModelFit start = m0;
-    std::vector<SelectionStep> steps;
-    for (size_t i = 0; i < r.steps.size(); ++i) {
-      if (!keep[i]) continue;
-      kept.push_back(current.terms[i].term);
-      start.terms.push_back(current.terms[i]);
-      steps.push_back(r.steps[i]);
-    }
-    if (steps.size() == r.steps.size()) return;
-    r.steps = steps;
-    const ModelFit refit = FitTerms(model, kept, all, &start);
-    const HeldOut refit_ho = CrossValidate(model, kept, fold, r.folds, refit);
-    if (refit.success && refit_ho.success) {
-      current = refit;
-      current_ho = refit_ho;
-    } else {
+    if (!KeepSteps(model, m0, keep, all, fold, r.folds, &r.steps, &current, &current_ho))
       r.message = "the refit without the dropped effects failed";
-    }
   };
 
   // 4. The outer hold-out around all of it; an effect selected here stays only if it earns
@@ -327,71 +301,6 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       }
       keep_only(keep);
     }
-  }
-  // The open world before a registered cause: where the calibrated base's median bias departs
-  // from some distance on as a step (its shared departure is beyond chance and a step explains
-  // it better than every smooth law in distance, constant, ∝ D and ∝ D², by more than a
-  // parameter's price: MedianStepFrom, read whatever group the rest's search names), no range
-  // law explains it, and one kept there would take an effect the registry does not have for the
-  // nearest one it has (a far over-read of 0.5 m from 12 m on was kept as a −0.18 px offset,
-  // one from 8 m on as a depth scale of 0.04). The step is reported in `unexplained` instead.
-  if (!r.steps.empty()) {
-    RestParams rp;
-    rp.alpha = params.alpha;
-    const double from = MedianStepFrom(model, model.Predict(m0), r.placement, rp);
-    if (std::isfinite(from)) {
-      const std::string step = "step from " + Num(from) + " m (distance ≥ " + Num(from) + " m)";
-      std::vector<char> keep(r.steps.size(), 1);
-      for (size_t i = 0; i < r.steps.size(); ++i) {
-        if (!sims.surfaces[current.terms[i].term.candidate].candidate.range_law) continue;
-        keep[i] = 0;
-        r.dropped.push_back(r.steps[i].effect +
-                            " (a range law; the calibrated base's median bias departs as a " +
-                            step + ", which no range law gives)");
-      }
-      keep_only(keep);
-    }
-  }
-  // An effect along the calibration is never selected (it is named "one of" with it below), and
-  // a kept effect may stand in for what the calibration cannot give of it: a temporal drift
-  // widens the temporal spread, which a σ_d explains, and moves every median by its mean
-  // disparity, which only an offset explains. Where, with such an effect in the model (the
-  // calibration component it duplicates held at its configured value), the kept one no longer
-  // earns its parameters by BIC, the table cannot tell the two apart: the kept one is named
-  // "one of" with it instead (a drift of 0.8 px/s was kept as an offset of 0.15 px beside a
-  // larger σ_d).
-  if (!r.steps.empty()) {
-    const double log_n = std::log(static_cast<double>(std::max(current.num_obs, 2)));
-    auto bic = [&](const ModelFit& f) { return f.Deviance() + f.num_params * log_n; };
-    std::vector<char> keep(r.steps.size(), 1);
-    for (size_t i = 0; i < r.steps.size(); ++i)
-      for (size_t e = 0; e < sel.effects.size() && keep[i]; ++e) {
-        if (!sel.effects[e].earns || !model.Absorbs(static_cast<int>(e))) continue;
-        std::vector<Term> terms;
-        ModelFit start = m0;
-        for (size_t j = 0; j < current.terms.size(); ++j) {
-          if (j == i) continue;
-          terms.push_back(current.terms[j].term);
-          start.terms.push_back(current.terms[j]);
-        }
-        terms.push_back(sel.effects[e].fit.term);
-        start.terms.push_back(sel.effects[e].fit);
-        const ModelFit without = FitTerms(model, terms, all, &start);
-        terms.push_back(current.terms[i].term);
-        start.terms.push_back(current.terms[i]);
-        const ModelFit with = FitTerms(model, terms, all, &start);
-        if (!without.success || !with.success || bic(with) < bic(without)) continue;
-        keep[i] = 0;
-        const int ci = current.terms[i].term.candidate;
-        r.ambiguous.push_back({{r.steps[i].effect, sel.effects[e].name},
-                               {SizeText(sims.surfaces[ci].candidate, current.terms[i]),
-                                SizeText(sims.surfaces[e].candidate, sel.effects[e].fit)},
-                               NAN});
-        r.dropped.push_back(r.steps[i].effect + " (beside " + sel.effects[e].name +
-                            ", along the calibration, it no longer earns its parameters: BIC " +
-                            Num(bic(with)) + " with it, " + Num(bic(without)) + " without)");
-      }
-    keep_only(keep);
   }
   std::stable_sort(r.effects.begin(), r.effects.end(),
                    [](const EffectResult& a, const EffectResult& b) {

@@ -71,7 +71,7 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
     GapModel model(d, sims, noise, params.fit, &placement);
     DiagnoseParams one_thread = params;  // the folds run side by side
     one_thread.simulate.threads = 1;
-    const Selection sel = Select(model, train, fold, num_folds, one_thread);
+    const Selection sel = Select(model, placement, train, fold, num_folds, one_thread);
     if (!sel.success) throw std::invalid_argument(sel.message);
     for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
     const std::vector<double> mu0 = model.Predict(sel.m0), mu1 = model.Predict(sel.current);

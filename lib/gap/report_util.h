@@ -1,5 +1,6 @@
 #pragma once
-// Formatting shared by report.cpp and headline.cpp (private to the gap module's text output).
+// Formatting shared by the gap module's text: the report, the headline and the reasons
+// the selection gives (private to the gap module).
 
 #include <cmath>
 #include <cstdio>

@@ -26,6 +26,9 @@ struct Selection {
   std::vector<int> chosen;             // candidates selected, in order
   ModelFit current;                    // the selection fitted together
   HeldOut current_ho;
+  // Taken by forward selection, then dropped by the step or calibration rule (Select), and why.
+  std::vector<std::string> dropped;
+  std::vector<Ambiguity> ambiguous;    // a dropped effect named "one of" with what explains it
 };
 
 // z = (y − μ) / noise of the valid observations (NaN elsewhere).
@@ -45,9 +48,27 @@ std::vector<double> Dispersion(const GapModel& model, const std::vector<double>&
 
 // Sets the model's dispersion (about the widest model: every candidate not absorbed by the
 // calibration and without a discrete axis, fitted together) and its calibration-absorbing
-// candidates; the model's design and simulations are the whole table's.
-Selection Select(GapModel& model, const std::vector<char>& train, const std::vector<int>& fold,
-                 int num_folds, const DiagnoseParams& params);
+// candidates; the model's design and simulations are the whole table's, `placement` the
+// estimate the model was built with. What forward selection takes then meets two rules, on the
+// training cells alone, so that an outer fold runs the procedure the whole table runs: a range
+// law is dropped where the calibrated base's median bias departs as a step (MedianStepFrom),
+// and a selected effect that no longer earns its parameters beside one along the calibration is
+// named "one of" with it.
+Selection Select(GapModel& model, const PlacementEstimate& placement,
+                 const std::vector<char>& train, const std::vector<int>& fold, int num_folds,
+                 const DiagnoseParams& params);
+
+// Keeps the steps marked in `keep` and their terms in `current`, refitted together from the
+// calibrated base `m0` on the cells marked in `train` and cross-validated over `fold` (`chosen`,
+// when given, follows the steps). False when the refit fails: the kept terms then stay at the
+// values they had beside the others.
+bool KeepSteps(const GapModel& model, const ModelFit& m0, const std::vector<char>& keep,
+               const std::vector<char>& train, const std::vector<int>& fold, int num_folds,
+               std::vector<SelectionStep>* steps, ModelFit* current, HeldOut* current_ho,
+               std::vector<int>* chosen = nullptr);
+
+// The size of a fitted term as text: "param value" (per scenario: "param v1 / v2 / …").
+std::string SizeText(const Candidate& candidate, const TermFit& term);
 
 // The selection's effects and calibration as the simulator takes them, one set per scenario.
 std::vector<sim::SimParams> SelectedParams(const Simulations& sims, const sim::SimParams& base,

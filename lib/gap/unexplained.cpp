@@ -217,8 +217,10 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
                         double* step_from) {
   const Design& d = m.design();
   const int kk = d.num_metrics();
-  std::vector<double> levels;
-  for (const auto& c : d.cells) levels.push_back(c.distance_m);
+  std::vector<double> levels;  // the distances of the blocks' cells
+  for (const auto& b : blocks)
+    for (int c : b)
+      if (c >= 0) levels.push_back(d.cells[c].distance_m);
   std::sort(levels.begin(), levels.end());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
   const size_t nf = 3 + (levels.size() > 1 ? levels.size() - 1 : 0);
@@ -288,13 +290,24 @@ std::string LevelName(const sim::Cell& c, int factor) {
 }
 
 double MedianStepFrom(const GapModel& m, const std::vector<double>& mu,
-                      const PlacementEstimate& pe, const RestParams& params) {
+                      const PlacementEstimate& pe, const std::vector<char>& cells,
+                      const RestParams& params) {
   const Design& d = m.design();
   const auto at = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
   if (at == d.metrics.end() || pe.empty()) return NAN;
   const int k = static_cast<int>(at - d.metrics.begin());
+  // The test points with a marked cell, and of those only the marked cells.
+  std::vector<std::vector<int>> blocks;
+  for (std::vector<int>& b : MakeBlocks(d, pe)) {
+    bool any = false;
+    for (int& c : b) {
+      if (c >= 0 && !cells[c]) c = -1;
+      any = any || c >= 0;
+    }
+    if (any) blocks.push_back(std::move(b));
+  }
   double step_from = NAN;
-  const double p = SharedDepartureP(m, mu, k, MakeBlocks(d, pe), params, &step_from);
+  const double p = SharedDepartureP(m, mu, k, blocks, params, &step_from);
   return p < params.alpha / d.num_metrics() ? step_from : NAN;
 }
 

@@ -48,8 +48,10 @@ std::vector<Unexplained> DescribeRest(const GapModel& model, const std::vector<d
 // above finds the shared departure beyond chance and a step explains more of it than every
 // smooth law in distance by more than a parameter's price; NaN otherwise. A step found at one
 // distance by the group search is described as a level ("distance 8 m", or "distance ≥ 8 m"),
-// which says nothing of whether a law in distance would do as well.
+// which says nothing of whether a law in distance would do as well. Read over the cells marked
+// in `cells` alone (an outer fold's training cells).
 double MedianStepFrom(const GapModel& model, const std::vector<double>& mu,
-                      const PlacementEstimate& placement, const RestParams& params);
+                      const PlacementEstimate& placement, const std::vector<char>& cells,
+                      const RestParams& params);
 
 }  // namespace depthbias::gap
