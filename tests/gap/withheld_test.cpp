@@ -474,9 +474,10 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
 // bound), and a user's unit of 32 rows (its offset read −0.133 px at seed 3 for −0.25 until a
 // range law's window metrics were averaged over placement: lib/gap/smooth.h). A case that passes at two or three seeds of five is not guarded: its outcome at one
 // seed is a draw, not the capability. Five tables without an
-// effect (seeds 2000–2004) must select nothing. Beside them, at seed 1, a 6 % depth scale must
-// be named by at least three of the four outer folds and nothing else kept; where the whole
-// table keeps it, its interval holds the injected size (it is kept below it: a pass needs 20 %).
+// effect (seeds 2000–2004) must select nothing. Beside them, at seeds 1 and 3, a 6 % depth scale
+// must be named by at least three of the four outer folds and nothing else kept; where the whole
+// table keeps it, its interval holds the injected size (at seed 1 it is kept below it: a pass
+// needs 20 %); at seed 3 it passes.
 // The whole suite and the other fifteen null tables take about 5 minutes a seed:
 // scripts/gap_cases.sh. The selected effect's interval is checked against its refits without
 // each distance on two of them: range_vs_depth large, whose refits widen it, and
@@ -504,7 +505,7 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
     sim::SimParams at = base;
     at.seed = seed;
     std::vector<int> only = indices(guarded);
-    if (seed == 1) only.push_back(indices({"depth_scale large"}).front());
+    only.push_back(indices({"depth_scale large"}).front());
     for (const CaseOutcome& o : RunWithheldCases(at, cases, params, seed + 999, only)) {
       if (seed == 1 && (o.truth.name == "range_vs_depth large" ||
                         o.truth.name == "radial_disparity_residual small"))
@@ -514,10 +515,15 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
         // and a scale kept has the injected size within its 95 % interval (at seed 1 it is
         // kept at 0.040, [−0.002, 0.081]: its refits without 4, 8 and 12 m read 0.037–0.040,
         // without 16 m 0.056).
-        const size_t nested = o.gap_json.find("\"nested\": {");
-        ASSERT_NE(nested, std::string::npos);
-        const std::string folds =
-            o.gap_json.substr(nested, o.gap_json.find("\"baseline\"", nested) - nested);
+        // At seed 3 it must pass: all four folds select it and, simulated, their selections
+        // remove 46 % of their calibrated gap, but the fold holding 4 m out predicted its tilt
+        // 55 times the noise off through the surface's lost-panel node, and while both the
+        // fits' prediction and the simulation had to earn, it was dropped.
+        if (seed == 3) {
+          EXPECT_TRUE(o.pass) << o.why;
+        }
+        const std::string folds = NestedFolds(o.gap_json);
+        ASSERT_FALSE(folds.empty());
         int named = 0;
         for (size_t at = folds.find("\"depth_scale\""); at != std::string::npos;
              at = folds.find("\"depth_scale\"", at + 1))
