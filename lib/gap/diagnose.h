@@ -31,7 +31,8 @@
 //     predicts its held-out cells additively and is simulated there at its fitted values
 //     (shrink_heldout_nested_pct, shrink_simulated_pct: the headline). An effect selected on
 //     the whole table stays only if it is selected in at least half of the outer folds and
-//     the outer folds' selections gain on their held-out cells. A selected shared term's 95 %
+//     the outer folds' selections gain on their held-out cells as simulated (as the fits
+//     predict them only where the folds were not simulated). A selected shared term's 95 %
 //     interval is the wider of its fit's and the spread of its refits without each fold
 //     (SizeSpread).
 //  5. What is left: the cells still significant after the selected effects; when they are,
