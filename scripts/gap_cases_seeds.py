@@ -5,9 +5,10 @@ One seed's table (diagnose_gap --cases, docs/gap/cases.md) is one draw of every 
 placement: a case near a criterion's edge passes at one seed and fails at the next. This reads
 the cases.md of several runs (diagnose_gap --cases --seed S --out DIR/seed-S) and prints, per
 case, the seeds it passes at and what was selected at each, as a Markdown table; then how
-often the 95 % interval of a selected effect that was injected (one parameter, shared by every
-cell) holds the injected size, read from each case's gap.json (DIR/seed-S/cases/): the interval
-gap.json gives, and the fit's own (`over_folds.ci95_fit`, where the refits widened it).
+often the 95 % interval of a selected effect that was injected (one parameter, in every cell)
+holds the injected size, read from each case's gap.json (DIR/seed-S/cases/): the interval
+gap.json gives, and the fit's own (`over_folds.ci95_fit`, where the refits widened it); an
+effect fitted per scenario counts once per scenario.
 
 Usage: gap_cases_seeds.py DIR/seed-1/cases.md DIR/seed-2/cases.md ...
   The seed of each file is read from its folder's name (seed-S), else its position (1, 2, ...).
@@ -77,14 +78,20 @@ def coverage(path, case, injected):
         gap = json.load(f)
     out = []
     for sel in gap.get("selected") or []:
-        if sel.get("name") not in injected or sel.get("scope") != "shared":
+        if sel.get("name") not in injected:
             continue
         param, truth = injected[sel["name"]]
-        ci = (sel.get("ci95") or {}).get(param)
-        if not ci or None in ci:
-            continue
-        fit = (sel.get("over_folds") or {}).get("ci95_fit") or ci
-        out.append((ci[0] <= truth <= ci[1], fit[0] <= truth <= fit[1]))
+        folds = sel.get("over_folds") or {}
+        if sel.get("scope") == "shared":
+            groups = [((sel.get("ci95") or {}).get(param), folds)]
+        else:  # per scenario: each scenario's interval
+            groups = [(((sel.get("ci95") or {}).get(s) or {}).get(param), folds.get(s) or {})
+                      for s in (sel.get("ci95") or {})]
+        for ci, spread in groups:
+            if not ci or None in ci:
+                continue
+            fit = spread.get("ci95_fit") or ci
+            out.append((ci[0] <= truth <= ci[1], fit[0] <= truth <= fit[1]))
     return out
 
 

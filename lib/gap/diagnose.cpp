@@ -83,23 +83,26 @@ DiagnoseResult Diagnose(const std::vector<records::PanelMetrics>& real,
 
 namespace {
 
-// The selected terms refitted without each fold's cells (SizeSpread), and their intervals
-// widened to the refits' spread.
-std::vector<SizeSpread> SpreadOverFolds(const GapModel& model, const std::vector<int>& fold,
-                                        int num_folds, ModelFit* selected) {
+// The selected terms refitted without each fold's cells (SizeSpread, one per group: the shared
+// value, or each scenario's), and their intervals widened to the refits' spread.
+std::vector<std::vector<SizeSpread>> SpreadOverFolds(const GapModel& model,
+                                                     const std::vector<int>& fold, int num_folds,
+                                                     ModelFit* selected) {
   const size_t n_terms = selected->terms.size();
-  std::vector<SizeSpread> out(n_terms);
+  std::vector<std::vector<SizeSpread>> out(n_terms);
   std::vector<Term> terms;
   std::vector<char> eligible(n_terms, 0);
   for (size_t i = 0; i < n_terms; ++i) {
     const TermFit& t = selected->terms[i];
     terms.push_back(t.term);
     const Candidate& c = model.surface(t.term.candidate).candidate;
-    eligible[i] = !t.term.per_scenario && c.axes.size() == 1 && !c.axes[0].discrete &&
-                  !t.values.empty() && !t.values[0].empty();
+    out[i].resize(t.values.size());
+    eligible[i] = c.axes.size() == 1 && !c.axes[0].discrete && !t.values.empty();
+    for (const auto& v : t.values) eligible[i] = eligible[i] && v.size() == 1;
   }
   if (std::find(eligible.begin(), eligible.end(), 1) == eligible.end()) return out;
-  std::vector<std::vector<double>> u(n_terms);
+  std::vector<std::vector<std::vector<double>>> u(n_terms);  // [term][group][refit]
+  for (size_t i = 0; i < n_terms; ++i) u[i].resize(out[i].size());
   for (int f = 0; f < num_folds; ++f) {
     std::vector<char> train(fold.size(), 0);
     bool held = false;
@@ -112,34 +115,41 @@ std::vector<SizeSpread> SpreadOverFolds(const GapModel& model, const std::vector
     if (!refit.success || refit.terms.size() != n_terms) continue;
     for (size_t i = 0; i < n_terms; ++i) {
       const TermFit& t = refit.terms[i];
-      if (!eligible[i] || t.at_bound[0][0]) continue;
-      out[i].folds.push_back(t.values[0][0]);
-      u[i].push_back(model.ToCoord(t.term.candidate, 0, t.values[0][0]));
+      if (!eligible[i] || t.values.size() != out[i].size()) continue;
+      for (size_t g = 0; g < t.values.size(); ++g) {
+        if (t.at_bound[g][0]) continue;
+        out[i][g].folds.push_back(t.values[g][0]);
+        u[i][g].push_back(model.ToCoord(t.term.candidate, 0, t.values[g][0]));
+      }
     }
   }
   for (size_t i = 0; i < n_terms; ++i) {
-    SizeSpread& s = out[i];
-    const int n = static_cast<int>(u[i].size());
-    if (!eligible[i] || n < 3) continue;
+    if (!eligible[i]) continue;
     TermFit* term = &selected->terms[i];
     const int cand = term->term.candidate;
-    s.checked = true;
-    double mean = 0, ss = 0;
-    for (double v : u[i]) mean += v / n;
-    for (double v : u[i]) ss += (v - mean) * (v - mean);
-    s.se_folds = std::sqrt((n - 1.0) / n * ss);
-    s.t = StudentT975(n - 1);
-    s.fit_lo = term->ci_lo[0][0];
-    s.fit_hi = term->ci_hi[0][0];
-    const double x = model.ToCoord(cand, 0, term->values[0][0]);
-    const double half = s.t * s.se_folds;
-    double lo = model.ToCoord(cand, 0, s.fit_lo), hi = model.ToCoord(cand, 0, s.fit_hi);
-    if (!std::isfinite(lo)) lo = x;
-    if (!std::isfinite(hi)) hi = x;
-    if (!(x - lo >= half && hi - x >= half)) {
-      s.widened = true;
-      term->ci_lo[0][0] = model.FromCoord(cand, 0, std::min(lo, x - half));
-      term->ci_hi[0][0] = model.FromCoord(cand, 0, std::max(hi, x + half));
+    for (size_t g = 0; g < out[i].size(); ++g) {
+      SizeSpread& s = out[i][g];
+      const std::vector<double>& ug = u[i][g];
+      const int n = static_cast<int>(ug.size());
+      if (n < 3) continue;
+      s.checked = true;
+      double mean = 0, ss = 0;
+      for (double v : ug) mean += v / n;
+      for (double v : ug) ss += (v - mean) * (v - mean);
+      s.se_folds = std::sqrt((n - 1.0) / n * ss);
+      s.t = StudentT975(n - 1);
+      s.fit_lo = term->ci_lo[g][0];
+      s.fit_hi = term->ci_hi[g][0];
+      const double x = model.ToCoord(cand, 0, term->values[g][0]);
+      const double half = s.t * s.se_folds;
+      double lo = model.ToCoord(cand, 0, s.fit_lo), hi = model.ToCoord(cand, 0, s.fit_hi);
+      if (!std::isfinite(lo)) lo = x;
+      if (!std::isfinite(hi)) hi = x;
+      if (!(x - lo >= half && hi - x >= half)) {
+        s.widened = true;
+        term->ci_lo[g][0] = model.FromCoord(cand, 0, std::min(lo, x - half));
+        term->ci_hi[g][0] = model.FromCoord(cand, 0, std::max(hi, x + half));
+      }
     }
   }
   return out;

@@ -144,17 +144,23 @@ std::string Headline(const DiagnoseResult& r) {
     o << "selected:";
     for (size_t i = 0; i < r.selected.terms.size(); ++i) {
       const TermFit& t = r.selected.terms[i];
-      const SizeSpread* sp =
-          i < r.size_spread.size() && r.size_spread[i].checked ? &r.size_spread[i] : nullptr;
+      const std::vector<SizeSpread> none;
+      const std::vector<SizeSpread>& spread = i < r.size_spread.size() ? r.size_spread[i] : none;
+      int checked = 0, widened = 0;
+      for (const SizeSpread& g : spread) checked += g.checked, widened += g.checked && g.widened;
       o << (i ? ";" : "") << " " << r.candidates[t.term.candidate].effect << " ("
-        << ParamsText(r, t, sp != nullptr, true);
-      if (sp) {
+        << ParamsText(r, t, checked > 0, true);
+      if (checked > 0) {
         o << ", 95 %";
-        if (sp->widened) {
+        const SizeSpread& sp = spread[0];
+        if (spread.size() == 1 && sp.widened) {
           o << " from its refits without each outer fold's cells (";
-          for (size_t f = 0; f < sp->folds.size(); ++f)
-            o << (f ? ", " : "") << Num(sp->folds[f], 3);
-          o << "); the fit alone [" << Num(sp->fit_lo, 3) << ", " << Num(sp->fit_hi, 3) << "]";
+          for (size_t f = 0; f < sp.folds.size(); ++f)
+            o << (f ? ", " : "") << Num(sp.folds[f], 3);
+          o << "); the fit alone [" << Num(sp.fit_lo, 3) << ", " << Num(sp.fit_hi, 3) << "]";
+        } else if (widened > 0) {
+          o << ", from its refits without each outer fold's cells where wider than the fit's ("
+            << widened << " of " << spread.size() << " scenarios)";
         }
       }
       o << ")";

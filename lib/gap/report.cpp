@@ -324,13 +324,25 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     ParamsJson(w, "ci95", r, t, true);
     if (i < r.steps.size())
       w.Number("delta_bic", r.steps[i].delta_bic).Number("heldout_gain", r.steps[i].heldout_gain);
-    if (i < r.size_spread.size() && r.size_spread[i].checked) {
-      const SizeSpread& sp = r.size_spread[i];
-      w.BeginObject("over_folds").BeginArray("values");
-      for (double v : sp.folds) w.Number(v);
-      w.EndArray().Number("jackknife_se", sp.se_folds).Number("t", sp.t);
-      w.BeginArray("ci95_fit").Number(sp.fit_lo).Number(sp.fit_hi).EndArray();
-      w.Bool("widened", sp.widened).EndObject();
+    if (i < r.size_spread.size()) {
+      // Shared: the spread itself; per scenario: one such object per scenario checked.
+      const std::vector<SizeSpread>& spread = r.size_spread[i];
+      auto one = [&](const char* key, const SizeSpread& sp) {
+        w.BeginObject(key).BeginArray("values");
+        for (double v : sp.folds) w.Number(v);
+        w.EndArray().Number("jackknife_se", sp.se_folds).Number("t", sp.t);
+        w.BeginArray("ci95_fit").Number(sp.fit_lo).Number(sp.fit_hi).EndArray();
+        w.Bool("widened", sp.widened).EndObject();
+      };
+      if (!t.term.per_scenario) {
+        if (!spread.empty() && spread[0].checked) one("over_folds", spread[0]);
+      } else if (std::any_of(spread.begin(), spread.end(),
+                             [](const SizeSpread& g) { return g.checked; })) {
+        w.BeginObject("over_folds");
+        for (size_t g = 0; g < spread.size(); ++g)
+          if (spread[g].checked) one(r.design.scenario_names[g].c_str(), spread[g]);
+        w.EndObject();
+      }
     }
     w.EndObject();
   }

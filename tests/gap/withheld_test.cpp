@@ -349,6 +349,50 @@ void ExpectIntervalOverFolds(const std::string& json, bool widened) {
   }
 }
 
+// The one selected effect fitted per scenario (one parameter): each scenario's 95 % interval
+// holds its fit's own and its fitted value ± t(3)·se of its refits without each of the four outer
+// folds, recomputed from the sizes gap.json lists; returns the intervals, in the scenarios' order.
+std::vector<std::vector<double>> ExpectScenarioIntervalsOverFolds(
+    const std::string& json, const std::vector<std::string>& scenarios) {
+  std::vector<std::vector<double>> out;
+  const size_t sel = json.find("\"selected\": [");
+  EXPECT_NE(sel, std::string::npos);
+  if (sel == std::string::npos) return out;
+  EXPECT_NE(json.find("\"scope\": \"per_scenario\"", sel), std::string::npos);
+  const size_t params_at = json.find("\"params\"", sel);
+  const size_t ci_at = json.find("\"ci95\"", sel);
+  const size_t folds_at = json.find("\"over_folds\"", sel);
+  EXPECT_NE(folds_at, std::string::npos) << "no spread over the folds";
+  if (params_at == std::string::npos || ci_at == std::string::npos || folds_at == std::string::npos)
+    return out;
+  for (const std::string& s : scenarios) {
+    const std::string key = "\"" + s + "\"";
+    const size_t xp = json.find(key, params_at), cp = json.find(key, ci_at),
+                 fp = json.find(key, folds_at);
+    const std::vector<double> x = NumbersFrom(json, json.find(':', json.find('{', xp) + 1), 1);
+    const std::vector<double> ci = NumbersFrom(json, json.find('[', cp), 2);
+    const std::vector<double> sizes = NumbersAfter(json, fp, "values", 4);
+    const std::vector<double> se = NumbersAfter(json, fp, "jackknife_se", 1);
+    const std::vector<double> t = NumbersAfter(json, fp, "t", 1);
+    const std::vector<double> fit = NumbersAfter(json, fp, "ci95_fit", 2);
+    EXPECT_TRUE(x.size() == 1 && ci.size() == 2 && sizes.size() == 4 && se.size() == 1 &&
+                t.size() == 1 && fit.size() == 2)
+        << s;
+    if (!(x.size() == 1 && ci.size() == 2 && sizes.size() == 4 && se.size() == 1 &&
+          t.size() == 1 && fit.size() == 2))
+      return out;
+    double mean = 0, ss = 0;
+    for (double v : sizes) mean += v / 4;
+    for (double v : sizes) ss += (v - mean) * (v - mean);
+    EXPECT_NEAR(se[0], std::sqrt(0.75 * ss), 1e-4 * se[0] + 1e-5 * std::fabs(x[0])) << s;
+    const double tol = 1e-4 * std::max(std::fabs(x[0]), 1e-3);
+    EXPECT_LE(ci[0], std::min(fit[0], x[0] - t[0] * se[0]) + tol) << s;
+    EXPECT_GE(ci[1], std::max(fit[1], x[0] + t[0] * se[0]) - tol) << s;
+    out.push_back(ci);
+  }
+  return out;
+}
+
 // One case of the suite at seed S, run as scripts/gap_cases.sh runs it (its table at S + 999 +
 // its index, the diagnosis at S); empty if no case has that name.
 std::vector<CaseOutcome> OneCase(const std::string& name, std::uint64_t seed) {
@@ -531,6 +575,19 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
       if (seed == 1 && (o.truth.name == "range_vs_depth large" ||
                         o.truth.name == "radial_disparity_residual small"))
         ExpectIntervalOverFolds(o.gap_json, o.truth.name == "range_vs_depth large");
+      // At seed 1 the offset is fitted per scenario: 0.403 and 0.402 px in daylight, 0.357 and
+      // 0.374 at sunset. The fits' own intervals ([0.383, 0.422] in daylight HA) missed 0.35 in
+      // three scenarios of four; each scenario's refits without each distance widen them, and
+      // every one holds it.
+      if (seed == 1 && o.truth.name == "disparity_offset large") {
+        const auto cis = ExpectScenarioIntervalsOverFolds(
+            o.gap_json, {"daylight/HA", "daylight/HD", "sunset/HA", "sunset/HD"});
+        EXPECT_EQ(cis.size(), 4u);
+        for (const auto& ci : cis) {
+          EXPECT_LE(ci[0], 0.35);
+          EXPECT_GE(ci[1], 0.35);
+        }
+      }
       if (o.truth.name == "depth_scale large") {
         // Most outer folds, each blind to one distance, name the scale; nothing else is kept,
         // and a scale kept has the injected size within its 95 % interval (at seed 1 it is
