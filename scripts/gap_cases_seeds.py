@@ -8,7 +8,10 @@ case, the seeds it passes at and what was selected at each, as a Markdown table;
 often the 95 % interval of a selected effect that was injected (one parameter, in every cell)
 holds the injected size, read from each case's gap.json (DIR/seed-S/cases/): the interval
 gap.json gives, and the fit's own (`over_folds.ci95_fit`, where the refits widened it); an
-effect fitted per scenario counts once per scenario.
+effect fitted per scenario counts once per scenario. Last, for each case of one effect of one
+parameter injected in every cell, its size against the detection limit on that side that each
+seed's table gives (gap.json `detection_limits`: found with 80 % chance by the fit's own test),
+and at how many seeds the effect was found (selected, or named as one of a confounded set).
 
 Usage: gap_cases_seeds.py DIR/seed-1/cases.md DIR/seed-2/cases.md ...
   The seed of each file is read from its folder's name (seed-S), else its position (1, 2, ...).
@@ -95,6 +98,84 @@ def coverage(path, case, injected):
     return out
 
 
+def load_gap(path, case):
+    json_path = os.path.join(os.path.dirname(path), "cases", json_name(case))
+    if not os.path.exists(json_path):
+        return None
+    with open(json_path, encoding="utf-8") as f:
+        return json.load(f)
+
+
+def limit_row(gap, effect, truth):
+    """(limit, the test's limit, found) on the injected side from one seed's gap.json; a limit
+    beyond the grid is infinite, None where the table gives none."""
+    found = any(s.get("name") == effect for s in gap.get("selected") or [])
+    found = found or any(effect in (a.get("one_of") or []) for a in gap.get("ambiguous") or [])
+    for e in (gap.get("detection_limits") or {}).get("effects") or []:
+        if e.get("effect") != effect or e.get("neutral") is None:
+            continue
+        side = e.get("above" if truth > e["neutral"] else "below")
+        if side is None:
+            return None, None, found
+        inf = float("inf") if truth > e["neutral"] else float("-inf")
+        size = side.get("size")
+        test = side.get("by_test")
+        return (inf if size is None else size), (inf if test is None else test), found
+    return None, None, found
+
+
+def limits_table(runs, paths):
+    rows = []
+    cases = list(runs[0][1])
+    for case in cases:
+        injected_text = runs[0][1][case][2]
+        sizes = injected_sizes(injected_text)
+        if len(sizes) != 1 or len(re.findall(r"\w+ \(", injected_text)) != 1:
+            continue
+        effect, (param, truth) = next(iter(sizes.items()))
+        limits, tests, found = [], [], 0
+        for (seed, table), path in zip(runs, paths):
+            gap = load_gap(path, case) if case in table else None
+            if gap is None:
+                continue
+            lim, test, hit = limit_row(gap, effect, truth)
+            found += hit
+            if lim is not None:
+                limits.append(lim)
+                tests.append(test)
+        if not limits:
+            continue
+        limits.sort(key=abs)
+        tests.sort(key=abs)
+        mid, mid_test = limits[len(limits) // 2], tests[len(tests) // 2]
+        neutral = neutral_of(runs, paths, case, effect)
+        rows.append((case, "%s %s" % (param, fmt(truth)), fmt(mid),
+                     "%s to %s" % (fmt(limits[0]), fmt(limits[-1])), fmt(mid_test),
+                     abs(truth - neutral) / max(abs(mid - neutral), 1e-12), found))
+    if not rows:
+        return
+    print()
+    print("| case | injected | limit, median over seeds | range | the test's alone | "
+          "injected / limit | found |")
+    print("|---|---|---|---|---|---|---|")
+    for case, inj, mid, rng, test, ratio, found in rows:
+        print("| %s | %s | %s | %s | %s | %.2f | %d of %d |" % (case, inj, mid, rng, test, ratio,
+                                                               found, len(runs)))
+
+
+def neutral_of(runs, paths, case, effect):
+    for (_, table), path in zip(runs, paths):
+        gap = load_gap(path, case) if case in table else None
+        for e in ((gap or {}).get("detection_limits") or {}).get("effects") or []:
+            if e.get("effect") == effect and e.get("neutral") is not None:
+                return e["neutral"]
+    return 0.0
+
+
+def fmt(v):
+    return "%.3g" % v
+
+
 def main(argv):
     if len(argv) < 2 or argv[1] in ("-h", "--help"):
         print(__doc__.strip())
@@ -133,6 +214,7 @@ def main(argv):
         print("95 %% intervals of selected, injected effects that hold the injected size: "
               "%d of %d (the fit's own: %d of %d)."
               % (sum(h for h, _ in held), len(held), sum(f for _, f in held), len(held)))
+    limits_table(runs, argv[1:])
     return 0
 
 

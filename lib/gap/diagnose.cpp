@@ -359,6 +359,28 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
     GapModel at_phi = model;  // the selection's dispersion
     at_phi.SetDispersion(r.dispersion);
     r.size_spread = SpreadOverFolds(at_phi, fold, r.folds, &r.selected);
+    // The shares an effect must remove, of the gaps the keep rule reads (above): each outer
+    // fold's calibrated base simulated on its held-out cells, or the table's calibrated gap
+    // without the nested hold-out.
+    LimitSettings ls;
+    ls.min_share = params.min_effect_shrink_pct / 100;
+    ls.min_own_share = params.min_own_shrink_pct / 100;
+    ls.pooled = current.terms.empty();
+    const std::vector<double>& zsc = r.nested.z_simulated_calibrated;
+    if (r.nested.run && zsc.size() == static_cast<size_t>(model.num_obs())) {
+      ls.fold = fold;
+      ls.fold_gap_sq.assign(r.folds, 0.0);
+      const int kk = design.num_metrics();
+      for (size_t o = 0; o < zsc.size(); ++o) {
+        const int f = fold[o / kk];
+        if (model.valid(o) && std::isfinite(zsc[o]) && f >= 0 && f < r.folds)
+          ls.fold_gap_sq[f] += zsc[o] * zsc[o];
+      }
+    } else if (r.calibration_in.count > 0) {
+      ls.fold.assign(design.num_cells(), 0);
+      ls.fold_gap_sq.push_back(r.calibration_in.overall * r.calibration_in.count);
+    }
+    r.limits = FindDetectionLimits(at_phi, all, ls);
   }
   r.z_selected = Scaled(model, model.Predict(current));
   r.z_selected_heldout = Scaled(model, current_ho.mu);

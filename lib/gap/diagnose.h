@@ -32,13 +32,15 @@
 //     (shrink_heldout_nested_pct, shrink_simulated_pct: the headline). An effect selected on
 //     the whole table stays only if it is selected in at least half of the outer folds and
 //     the outer folds' selections gain on their held-out cells as simulated (as the fits
-//     predict them only where the folds were not simulated). A selected shared term's 95 %
+//     predict them only where the folds were not simulated). A selected term's 95 %
 //     interval is the wider of its fit's and the spread of its refits without each fold
-//     (SizeSpread).
+//     (SizeSpread); a term fitted per scenario gets one per scenario.
 //  5. What is left: the cells still significant after the selected effects; when they are,
 //     where the rest lies (factor cells), its size and its form (∝ D, ∝ D², a step from a
 //     distance on, one test point), never pinned on a registered effect that did not earn
-//     (open world).
+//     (open world). And what the table cannot see: each effect's smallest size the fit's own
+//     test would find with 80 % chance, and the range it moves at the farthest distance
+//     (limits.h).
 
 #include <string>
 #include <vector>
@@ -46,6 +48,7 @@
 #include "gap/candidates.h"
 #include "gap/design.h"
 #include "gap/fit.h"
+#include "gap/limits.h"
 #include "gap/localize.h"
 #include "gap/noise.h"
 #include "gap/simulations.h"
@@ -241,6 +244,9 @@ struct DiagnoseResult {
   std::vector<std::string> dropped;     // selected on the table, not earning in the outer loop
   std::vector<Ambiguity> ambiguous;
   std::vector<Unexplained> unexplained;
+  // The smallest size of each registered effect the fit's own test finds with 80 % chance on
+  // this table (limits.h): below it, an effect goes unseen.
+  DetectionLimits limits;
 
   // The result of the named effect alone (nullptr if it was not a candidate).
   const EffectResult* Effect(const std::string& name) const;

@@ -70,6 +70,89 @@ std::string FarGap(const DiagnoseResult& r, int km) {
 
 const double kEmitterZ = 3.5;  // an emitter mismatch worth a headline (|z|, about p < 0.05/64)
 
+// The range laws' sizes that could go unseen, over-reads first: "over-reads at 16 m up to
+// 1.1 m (disparity_offset -0.285 px), …; under-reads …". Empty without a median bias.
+std::string Unseen(const DiagnoseResult& r) {
+  const DetectionLimits& l = r.limits;
+  std::string side_text[2];
+  for (int over = 1; over >= 0; --over) {
+    std::vector<std::pair<double, std::string>> items;
+    for (size_t i = 0; i < l.effects.size() && i < r.candidates.size(); ++i) {
+      const DetectionLimit& e = l.effects[i];
+      if (!r.candidates[i].range_law) continue;
+      for (int side = 0; side < 2; ++side) {
+        const double m = e.far_m[side];
+        if (!std::isfinite(m) || (m > 0) != (over == 1) || std::fabs(m) < 0.005) continue;
+        const bool beyond = !std::isfinite(e.size[side]);
+        const Axis& axis = r.candidates[i].axes[0].param == e.param ? r.candidates[i].axes[0]
+                                                                    : r.candidates[i].axes.back();
+        const double size = beyond ? (side == 0 ? axis.nodes.front() : axis.nodes.back())
+                                   : e.size[side];
+        const bool bound = size == axis.min_value || size == axis.max_value;
+        const std::string more = !beyond ? "" : bound ? ", its bound" : ", the largest simulated";
+        items.push_back({std::fabs(m), Num(std::fabs(m), 2) + " m" +
+                                           (beyond && !bound ? " and more" : "") + " (" +
+                                           e.effect + " " + e.param + " " + Signed(size) + more +
+                                           ")"});
+      }
+    }
+    std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) {
+      return a.first > b.first;
+    });
+    for (size_t i = 0; i < items.size(); ++i)
+      side_text[over] += (i ? ", " : "") + items[i].second;
+  }
+  if (side_text[0].empty() && side_text[1].empty()) return "";
+  std::string s = "could go unseen: at " + Num(l.far_distance_m) + " m";
+  if (!side_text[1].empty()) s += ", over-reads up to " + side_text[1];
+  if (!side_text[0].empty()) s += (side_text[1].empty() ? ", " : "; ") +
+                                  std::string("under-reads up to ") + side_text[0];
+  return s + ": no smaller law would be kept on this table (the fit's test and the share of "
+             "the gap an effect must remove; a lower bound)\n";
+}
+
+// Every effect's detection limits (limits.h) as a table.
+std::string LimitsMarkdown(const DiagnoseResult& r) {
+  const DetectionLimits& l = r.limits;
+  if (l.effects.empty()) return "";
+  std::ostringstream o;
+  o << "## What this table cannot see\n\n"
+    << "The smallest size of each effect, either way from its absence, that the diagnosis would "
+       "keep on this table: the higher of two bars. The fit's test (ΔBIC > 0) finds it with "
+    << Pct(100 * l.settings.power) << " chance: its noncentrality √λ reaches √(ln n) + Φ⁻¹("
+    << Num(l.settings.power) << ") = " << Num(l.z_needed) << " over " << l.observations
+    << " observations (this table's noise, placement scatter and dispersion; the calibration "
+       "takes what it can). And once it is there it removes, on average over the outer folds, "
+    << Pct(100 * l.settings.min_own_share) << " of each fold's calibrated gap on its held-out "
+       "cells"
+    << (l.settings.pooled ? ", and " + Pct(100 * l.settings.min_share) + " of their sum" : "")
+    << ". The outer folds' agreement is asked too, so the diagnosis needs more still. \"far\" "
+       "is the median bias the size adds at "
+    << Num(l.far_distance_m) << " m.\n\n"
+    << "| effect | axis | below (test; share) | far | above (test; share) | far | note |\n"
+    << "|---|---|---|---|---|---|---|\n";
+  for (const DetectionLimit& e : l.effects) {
+    if (e.param.empty()) continue;
+    std::string note;
+    if (!e.other.empty()) note = e.other + " held at " + Num(e.other_value);
+    if (e.frozen) note += std::string(note.empty() ? "" : "; ") + "found as one of {" + e.effect +
+                          ", calibration}";
+    auto size = [&](int side) {
+      if (!e.searched[side]) return std::string("–");
+      return (std::isfinite(e.size[side]) ? Num(e.size[side]) : std::string("beyond the grid")) +
+             " (" + Num(e.by_test[side]) + "; " + Num(e.by_share[side]) + ")";
+    };
+    auto far = [&](int side) {
+      if (!std::isfinite(e.far_m[side])) return std::string("–");
+      return (std::isfinite(e.size[side]) ? "" : "≥ ") + Signed(e.far_m[side], 2) + " m";
+    };
+    o << "| " << e.effect << " | " << e.param << " | " << size(0) << " | " << far(0) << " | "
+      << size(1) << " | " << far(1) << " | " << note << " |\n";
+  }
+  o << "\n";
+  return o.str();
+}
+
 }  // namespace
 
 std::string Headline(const DiagnoseResult& r) {
@@ -103,6 +186,7 @@ std::string Headline(const DiagnoseResult& r) {
         << " beyond the placement law (below)";
     o << "\n";
   }
+  o << Unseen(r);
   // 2. Placement.
   if (!pe.empty() && km >= 0) {
     auto law = [&](double d) { return pe.Law(km, kMedianBias, d); };
@@ -335,7 +419,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
       << Num(1.96 * u.size_se, 2) << " " << u.unit << " | " << u.form << " | "
       << Signed(u.size_at_max) << " | " << Pct(u.share_pct) << " | " << Num(u.chi2) << " / "
       << u.df << " | " << Num(u.p_value, 2) << " |\n";
-  o << "\n";
+  o << "\n" << LimitsMarkdown(r);
   return o.str();
 }
 

@@ -38,6 +38,9 @@ double MedianAbs(std::vector<double> v);
 // Student's t at 97.5 % for `dof` degrees of freedom (1.96 beyond the table).
 double StudentT975(int dof);
 
+// The standard normal's Φ⁻¹(1 − p/2), 0 < p ≤ 1, by bisection on erfc.
+double TwoSidedCritical(double p);
+
 // The emitter mismatch of one group of twins (a scenario at one distance): the mean over its
 // test points of (real on − real off) − (sim on − sim off), in the metric's unit.
 struct EmitterGap {

@@ -10,16 +10,6 @@
 namespace depthbias::gap {
 namespace {
 
-// Φ⁻¹(1 − p/2) for small p, by bisection on erfc.
-double TwoSidedCritical(double p) {
-  double lo = 0, hi = 40;
-  for (int i = 0; i < 100; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-
 // Student's t quantile for the same two-sided p with nu degrees of freedom, from the normal
 // quantile z by the Cornish–Fisher expansion (Abramowitz & Stegun 26.7.5; within 1 % for
 // nu >= 5 at these tail probabilities, conservative below).

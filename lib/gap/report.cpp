@@ -190,6 +190,31 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
     w.EndArray().EndObject();
   }
   w.EndArray();
+  const DetectionLimits& l = r.limits;
+  w.BeginObject("detection_limits");
+  w.Number("power", l.settings.power).Number("z_needed", l.z_needed);
+  w.Number("min_share", l.settings.min_share).Number("min_own_share", l.settings.min_own_share);
+  w.Bool("pooled", l.settings.pooled).BeginArray("fold_gap_sq");
+  for (double g : l.settings.fold_gap_sq) w.Number(g);
+  w.EndArray();
+  w.Integer("observations", l.observations).Number("far_distance_m", l.far_distance_m);
+  w.BeginArray("effects");
+  for (const DetectionLimit& e : l.effects) {
+    w.BeginObject().String("effect", e.effect).String("param", e.param);
+    w.Number("neutral", e.neutral).Bool("discrete", e.discrete);
+    w.Bool("one_of_calibration", e.frozen != 0);
+    if (!e.other.empty()) w.BeginObject("held").Number(e.other, e.other_value).EndObject();
+    // Per side: null beyond the grid; absent where the grid does not extend that way.
+    const char* side_name[2] = {"below", "above"};
+    for (int side = 0; side < 2; ++side) {
+      if (!e.searched[side]) continue;
+      w.BeginObject(side_name[side]).Number("size", e.size[side]);
+      w.Number("by_test", e.by_test[side]).Number("by_share", e.by_share[side]);
+      w.Number("far_m", e.far_m[side]).EndObject();
+    }
+    w.EndObject();
+  }
+  w.EndArray().EndObject();
 }
 
 }  // namespace

@@ -99,11 +99,11 @@ TEST(DiagnoseGapApp, WritesGapJsonAndReport) {
                           "\"shrink_in_sample_pct\"", "\"shrink_heldout_pct\"", "\"ci95\"",
                           "\"params\"", "\"noise_method\"", "\"placement\"", "\"emitter\"",
                           "\"shrink_simulated_pct\"", "\"shrink_heldout_nested_pct\"",
-                          "\"unexplained\"", "\"ambiguous\""})
+                          "\"unexplained\"", "\"ambiguous\"", "\"detection_limits\""})
     EXPECT_NE(json.find(key), std::string::npos) << key;
   const std::string md = ReadFile(d / "out" / "report.md");
   for (const char* part : {"## 1. The gap", "## 2. Where", "## 3. Which effect", "## 4. How far",
-                           "## 5. What is left"})
+                           "## 5. What is left", "## What this table cannot see"})
     EXPECT_NE(md.find(part), std::string::npos) << part;
   EXPECT_NE(ReadFile(d / "stdout.txt").find("how far:"), std::string::npos);
   // Never writes over an input.

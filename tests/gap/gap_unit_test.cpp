@@ -15,6 +15,7 @@
 #include "gap/design.h"
 #include "gap/fit.h"
 #include "gap/json.h"
+#include "gap/limits.h"
 #include "gap/localize.h"
 #include "gap/noise.h"
 #include "gap/placement.h"
@@ -559,6 +560,161 @@ TEST(Rest, OfAFlaggedPairOfPartnersTheMisplacedOneIsNamed) {
               both, named);
   EXPECT_GE(both, 2) << "the case must flag partners for the rule to be tested";
   EXPECT_GE(named, both);
+}
+
+// Detection limits (limits.h) against the fit itself. A 2 lights × 4 distances × 4 angles table
+// under placement scatter (0.05 m + 2 % of D) and 5 mm of replicate noise, one candidate that
+// moves the median by −δ·D²/60.8 (a disparity offset's law) and a calibration direction ∝ D that
+// can take part of it. The limit found in closed form (the whitened departure with the
+// calibration projected out) is checked by fitting: on a table that reads the base plus the
+// departure at the limit, noise-free, the calibrated base's deviance less the candidate's is
+// the noncentrality asked, (√(ln n) + Φ⁻¹(0.8))², and the fit finds the limit's size. The
+// share-of-the-gap bar is checked against the folds' gains computed apart. Without placement
+// scatter the limit is smaller; with the calibration free to move it is larger than with the
+// calibration held.
+struct LimitTable {
+  Design d;
+  Simulations s;
+  NoiseEstimate n;
+  PlacementEstimate pe;
+};
+
+double OffsetLaw(double delta, double distance_m) { return -delta * distance_m * distance_m / 60.8; }
+
+LimitTable MakeLimitTable(std::uint32_t seed) {
+  std::vector<records::PanelMetrics> rows = ArticleGrid();
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::map<std::string, double> shift;
+  for (auto& r : rows) {
+    const std::string key = r.light + std::to_string(r.distance_m) + std::to_string(r.angle_deg);
+    if (!shift.count(key)) shift[key] = (0.05 + 0.02 * r.distance_m) * unit(rng);
+    r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
+  }
+  LimitTable t;
+  std::string why;
+  if (!BuildDesign(rows, &t.d, &why)) throw std::runtime_error(why);
+  t.s = MedianBiasOnly(t.d);
+  const int kk = t.d.num_metrics();
+  t.s.jac_log_sigma.assign(t.s.base.size(), 0.0);
+  t.s.jac_logit_p.assign(t.s.base.size(), 0.0);
+  Surface surf;
+  surf.candidate = DefaultCandidates()[0];
+  surf.candidate.range_law = false;  // the law as given, not averaged over placement
+  EXPECT_EQ(surf.candidate.effect, "disparity_offset");
+  const std::vector<double>& nodes = surf.candidate.axes[0].nodes;
+  surf.num_nodes = static_cast<int>(nodes.size());
+  for (int c = 0; c < t.d.num_cells(); ++c)
+    for (int k = 0; k < kk; ++k) {
+      const size_t o = static_cast<size_t>(c) * kk + k;
+      const double dist = t.d.cells[c].distance_m;
+      if (k == 0) t.s.jac_log_sigma[o] = 0.02 * dist;
+      for (double v : nodes) surf.table.push_back(t.s.base[o] + (k == 0 ? OffsetLaw(v, dist) : 0));
+    }
+  t.s.surfaces.push_back(surf);
+  t.n = EstimateNoise(t.d, t.s);
+  t.pe = EstimatePlacement(t.d, t.s, t.n, std::vector<char>(t.d.num_cells(), 1), 0.05);
+  return t;
+}
+
+TEST(Limits, AtTheLimitTheFitGainsTheNoncentralityAskedAndTheGainTheShareAsks) {
+  const LimitTable t = MakeLimitTable(31);
+  FitSettings fs;
+  fs.huber_k = 0;  // plain squares: the deviance is the noncentrality
+  const std::vector<char> all(t.d.num_cells(), 1);
+  const GapModel model(t.d, t.s, t.n, fs, &t.pe);
+  const DetectionLimits lim = FindDetectionLimits(model, all);
+  ASSERT_EQ(lim.effects.size(), 1u);
+  const DetectionLimit& e = lim.effects[0];
+  EXPECT_NEAR(lim.z_needed, std::sqrt(std::log(lim.observations)) + 0.8416, 1e-3);
+  EXPECT_EQ(lim.far_distance_m, 16);
+  ASSERT_TRUE(std::isfinite(e.size[0]) && std::isfinite(e.size[1]));
+  EXPECT_LT(e.size[0], 0);
+  EXPECT_GT(e.size[1], 0);
+  EXPECT_NEAR(e.size[0], -e.size[1], 1e-3 * e.size[1]);  // a law linear in δ
+  EXPECT_NEAR(e.far_m[1], OffsetLaw(e.size[1], 16), 1e-6);
+  EXPECT_EQ(e.by_test[1], e.size[1]);  // no gap given: the test alone
+  EXPECT_TRUE(std::isnan(e.by_share[1]));
+  std::printf("limit: delta_px ±%.4f (%.3f m at 16 m)\n", e.size[1], e.far_m[1]);
+
+  for (int side = 0; side < 2; ++side) {
+    Design at = t.d;  // the base plus the departure at the limit, noise-free
+    const int kk = at.num_metrics();
+    for (int c = 0; c < at.num_cells(); ++c)
+      at.real[static_cast<size_t>(c) * kk] = OffsetLaw(e.size[side], at.cells[c].distance_m);
+    const GapModel exact(at, t.s, t.n, fs, &t.pe);
+    const ModelFit m0 = FitTerms(exact, {}, all);
+    const ModelFit f = FitCandidate(exact, 0, false, all);
+    ASSERT_TRUE(m0.success && f.success);
+    const double drop = m0.Deviance() - f.Deviance();
+    EXPECT_NEAR(drop, lim.z_needed * lim.z_needed, 0.02 * lim.z_needed * lim.z_needed);
+    EXPECT_NEAR(f.terms[0].values[0][0], e.size[side], 0.02 * std::fabs(e.size[side]));
+    EXPECT_GT(m0.Deviance(), 1.0) << "the calibration cannot take the whole law";
+  }
+
+  // The share of the gap, with the table held out by distance (four folds): where the law's
+  // Σz² gain γ_f over each fold's observations, against the fold's calibrated Σz² G_f, averages
+  // γ_f / (G_f + γ_f) = p over the folds (its own part); pooled, Σγ_f / Σ(G_f + γ_f) = p too,
+  // the higher bar deciding.
+  const int kk = t.d.num_metrics();
+  std::vector<int> fold(t.d.num_cells());
+  for (int c = 0; c < t.d.num_cells(); ++c)
+    fold[c] = static_cast<int>(t.d.cells[c].distance_m / 4) - 1;
+  auto gains = [&](double delta) {
+    std::vector<double> g(4, 0.0);
+    for (int o = 0; o < model.num_obs(); ++o)
+      if (model.valid(o) && o % kk == 0)
+        g[fold[o / kk]] += std::pow(OffsetLaw(delta, t.d.cells[o / kk].distance_m) /
+                                        model.noise(o), 2);
+    return g;
+  };
+  // The last: a 16 m fold with almost no gap of its own, where the law's own part is won at
+  // once and the pooled share decides.
+  const std::vector<std::vector<double>> fold_gaps = {
+      {50, 100, 50, 150}, {2000, 4000, 2000, 6000}, {5000, 5000, 5000, 1}};
+  for (const std::vector<double>& gaps : fold_gaps) {
+    const double scale = gaps[0];
+    LimitSettings ls;
+    ls.fold = fold;
+    ls.fold_gap_sq = gaps;
+    ls.pooled = false;
+    const DetectionLimit own = FindDetectionLimits(model, all, ls).effects[0];
+    ASSERT_TRUE(std::isfinite(own.by_share[1])) << scale;
+    std::vector<double> g = gains(own.by_share[1]);
+    double mean = 0;
+    for (int f = 0; f < 4; ++f) mean += g[f] / (ls.fold_gap_sq[f] + g[f]) / 4;
+    EXPECT_NEAR(mean, ls.min_own_share, 2e-3) << scale;
+    EXPECT_NEAR(own.by_test[1], e.size[1], 1e-9);
+    EXPECT_EQ(own.size[1], std::max(own.by_test[1], own.by_share[1])) << scale;
+
+    ls.pooled = true;
+    const DetectionLimit both = FindDetectionLimits(model, all, ls).effects[0];
+    g = gains(both.by_share[1]);
+    double gain = 0, whole = 0;
+    mean = 0;
+    for (int f = 0; f < 4; ++f) {
+      gain += g[f];
+      whole += ls.fold_gap_sq[f] + g[f];
+      mean += g[f] / (ls.fold_gap_sq[f] + g[f]) / 4;
+    }
+    EXPECT_GE(both.by_share[1], own.by_share[1] - 1e-9);
+    if (gaps[3] < 10) {
+      EXPECT_GT(both.by_share[1], 2 * own.by_share[1]) << "the pooled share";
+    }
+    EXPECT_NEAR(std::min(mean, gain / whole), ls.min_share, 2e-3) << scale;
+    std::printf("fold gaps from %g: by its own share %.4f px, pooled too %.4f px\n", scale,
+                own.by_share[1], both.by_share[1]);
+  }
+
+  // Without placement scatter every recording is its own piece of evidence: a smaller limit.
+  const GapModel no_placement(t.d, t.s, t.n, fs, nullptr);
+  const double bare = FindDetectionLimits(no_placement, all).effects[0].size[1];
+  EXPECT_LT(bare, 0.5 * e.size[1]);
+  // A calibration direction that could mimic the law takes part of its evidence.
+  Simulations held = t.s;
+  std::fill(held.jac_log_sigma.begin(), held.jac_log_sigma.end(), 0.0);
+  const GapModel frozen(t.d, held, t.n, fs, &t.pe);
+  EXPECT_LT(FindDetectionLimits(frozen, all).effects[0].size[1], e.size[1]);
 }
 
 TEST(ChiSquare, SurvivalMatchesKnownQuantiles) {

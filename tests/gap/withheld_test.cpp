@@ -527,6 +527,21 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
   std::string recovered;
   for (const auto& [effect, size] : o.recovered) recovered += effect + ": " + size + "; ";
   EXPECT_TRUE(o.pass) << o.why << "\n" << recovered;
+  // What the unit cannot see (limits.h), on its second line: an offset found must lie beyond
+  // the limit on its side, and the limit must be a size a field campaign can miss (its test
+  // alone at least 0.03 px: 32 rows under 2 % placement scatter are not a lab).
+  const size_t second = summary.find('\n') + 1;
+  EXPECT_EQ(summary.compare(second, 28, "could go unseen: at 16 m, ov"), 0) << summary;
+  const DetectionLimit* offset = nullptr;
+  for (const DetectionLimit& e : r.limits.effects)
+    if (e.effect == "disparity_offset") offset = &e;
+  ASSERT_NE(offset, nullptr);
+  EXPECT_LT(offset->size[0], -0.03);
+  EXPECT_GT(offset->size[0], -0.25) << "the −0.25 px offset was kept";
+  EXPECT_LE(offset->size[0], offset->by_test[0]);
+  EXPECT_GT(offset->far_m[0], 0) << "a negative offset over-reads";
+  std::printf("field unit: offset kept from %.3f px (test %.3f, share %.3f), %.2f m at 16 m\n",
+              offset->size[0], offset->by_test[0], offset->by_share[0], offset->far_m[0]);
 }
 
 // Cases that pass at four or five of the seeds 1–5 (docs/gap/cases.md, "Over five seeds"), at
