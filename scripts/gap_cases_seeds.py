@@ -12,6 +12,8 @@ effect fitted per scenario counts once per scenario. Last, for each case of one 
 parameter injected in every cell, its size against the detection limit on that side that each
 seed's table gives (gap.json `detection_limits`: found with 80 % chance by the fit's own test),
 and at how many seeds the effect was found (selected, or named as one of a confounded set).
+The limit of reference is the median over the tables without effect of the same runs (where
+the case has their number of observations): the campaign's, not swollen by the effect itself.
 
 Usage: gap_cases_seeds.py DIR/seed-1/cases.md DIR/seed-2/cases.md ...
   The seed of each file is read from its folder's name (seed-S), else its position (1, 2, ...).
@@ -124,56 +126,82 @@ def limit_row(gap, effect, truth):
     return None, None, found
 
 
+def null_limits(paths):
+    """{(effect, side): [size, ...]} over the tables without effect (cases/null_*.json) of every
+    run, and their number of observations; a size beyond the grid is infinite."""
+    out, observations = {}, None
+    for path in paths:
+        folder = os.path.join(os.path.dirname(path), "cases")
+        for name in sorted(os.listdir(folder)) if os.path.isdir(folder) else []:
+            if not re.match(r"null_\d+\.json$", name):
+                continue
+            with open(os.path.join(folder, name), encoding="utf-8") as f:
+                limits = json.load(f).get("detection_limits") or {}
+            observations = limits.get("observations", observations)
+            for e in limits.get("effects") or []:
+                for side in ("below", "above"):
+                    if e.get(side) is not None:
+                        size = e[side].get("size")
+                        inf = float("inf") if side == "above" else float("-inf")
+                        out.setdefault((e["effect"], side), []).append(
+                            inf if size is None else size)
+    return out, observations
+
+
+def median(values):
+    values = sorted(values, key=abs)
+    return values[len(values) // 2]
+
+
 def limits_table(runs, paths):
+    """Each one-effect case's size against the detection limits: on the tables without effect
+    (the campaign's, where the case has their number of observations) and on the case's own
+    tables (which hold the effect, so their gap is larger)."""
+    nulls, null_obs = null_limits(paths)
     rows = []
-    cases = list(runs[0][1])
-    for case in cases:
+    for case in list(runs[0][1]):
         injected_text = runs[0][1][case][2]
         sizes = injected_sizes(injected_text)
         if len(sizes) != 1 or len(re.findall(r"\w+ \(", injected_text)) != 1:
             continue
         effect, (param, truth) = next(iter(sizes.items()))
-        limits, tests, found = [], [], 0
+        limits, tests, found, neutral, observations = [], [], 0, 0.0, None
         for (seed, table), path in zip(runs, paths):
             gap = load_gap(path, case) if case in table else None
             if gap is None:
                 continue
             lim, test, hit = limit_row(gap, effect, truth)
             found += hit
+            observations = (gap.get("detection_limits") or {}).get("observations")
+            for e in (gap.get("detection_limits") or {}).get("effects") or []:
+                if e.get("effect") == effect and e.get("neutral") is not None:
+                    neutral = e["neutral"]
             if lim is not None:
                 limits.append(lim)
                 tests.append(test)
         if not limits:
             continue
-        limits.sort(key=abs)
-        tests.sort(key=abs)
-        mid, mid_test = limits[len(limits) // 2], tests[len(tests) // 2]
-        neutral = neutral_of(runs, paths, case, effect)
-        rows.append((case, "%s %s" % (param, fmt(truth)), fmt(mid),
-                     "%s to %s" % (fmt(limits[0]), fmt(limits[-1])), fmt(mid_test),
-                     abs(truth - neutral) / max(abs(mid - neutral), 1e-12), found))
+        side = "above" if truth > neutral else "below"
+        reference = nulls.get((effect, side)) if observations == null_obs else None
+        ref = median(reference) if reference else median(limits)
+        rows.append((case, "%s %s" % (param, fmt(truth)),
+                     "%s (%s to %s)" % (fmt(ref), fmt(min(reference, key=abs)),
+                                        fmt(max(reference, key=abs))) if reference else "-",
+                     fmt(median(limits)), fmt(median(tests)),
+                     abs(truth - neutral) / max(abs(ref - neutral), 1e-12), found))
     if not rows:
         return
     print()
-    print("| case | injected | limit, median over seeds | range | the test's alone | "
-          "injected / limit | found |")
+    print("| case | injected | limit without effect: median (range) | limit on its own tables | "
+          "the test's alone | injected / limit | found |")
     print("|---|---|---|---|---|---|---|")
-    for case, inj, mid, rng, test, ratio, found in rows:
-        print("| %s | %s | %s | %s | %s | %.2f | %d of %d |" % (case, inj, mid, rng, test, ratio,
+    for case, inj, ref, own, test, ratio, found in rows:
+        print("| %s | %s | %s | %s | %s | %.2f | %d of %d |" % (case, inj, ref, own, test, ratio,
                                                                found, len(runs)))
 
 
-def neutral_of(runs, paths, case, effect):
-    for (_, table), path in zip(runs, paths):
-        gap = load_gap(path, case) if case in table else None
-        for e in ((gap or {}).get("detection_limits") or {}).get("effects") or []:
-            if e.get("effect") == effect and e.get("neutral") is not None:
-                return e["neutral"]
-    return 0.0
-
-
 def fmt(v):
-    return "%.3g" % v
+    return "%.3g" % v if v not in (float("inf"), float("-inf")) else "beyond the grid"
 
 
 def main(argv):
