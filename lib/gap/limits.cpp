@@ -211,9 +211,8 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
         const double now[2] = {sc.test, sc.share}, before[2] = {prev.test, prev.share};
         for (int bar = 0; bar < 2; ++bar) {
           if (std::isfinite(at[bar]) || now[bar] < 0) continue;
-          at[bar] = axis.discrete || now[bar] == before[bar]
-                        ? walk[i]
-                        : prev_c + (walk[i] - prev_c) * (0 - before[bar]) / (now[bar] - before[bar]);
+          const double t = now[bar] == before[bar] ? 1 : -before[bar] / (now[bar] - before[bar]);
+          at[bar] = axis.discrete ? walk[i] : prev_c + (walk[i] - prev_c) * t;
         }
         prev_c = walk[i];
         prev = sc;

@@ -579,7 +579,9 @@ struct LimitTable {
   PlacementEstimate pe;
 };
 
-double OffsetLaw(double delta, double distance_m) { return -delta * distance_m * distance_m / 60.8; }
+double OffsetLaw(double delta, double distance_m) {
+  return -delta * distance_m * distance_m / 60.8;
+}
 
 LimitTable MakeLimitTable(std::uint32_t seed) {
   std::vector<records::PanelMetrics> rows = ArticleGrid();
