@@ -50,8 +50,11 @@ constexpr char kUsage[] =
     "  --min-effect-shrink P  an effect is kept only if the outer folds' selections, simulated,\n"
     "                       remove P % of the calibrated base's held-out gap, noise\n"
     "                       included (10)\n"
-    "  --min-own-shrink P   and only if leaving it out of them brings back P % of an outer\n"
-    "                       fold's calibrated gap, on average over the folds (10)\n"
+    "  --min-own-shrink P   and leaving it out of them brings back P % of an outer fold's\n"
+    "                       calibrated gap, on average over the folds (10)\n"
+    "  --min-moved-shrink P, --min-own-moved-shrink P\n"
+    "                       or the same two shares of the gap in the metrics they move\n"
+    "                       reach P % (20, 30)\n"
     "  --case NAME          --cases: only this case (as named in the table's first column;\n"
     "                       repeatable; \"no effect\" for the 20 null tables)\n"
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
@@ -108,6 +111,9 @@ int main(int argc, char** argv) {
       else if (a == "--case") only_cases.push_back(args.Value());
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
+      else if (a == "--min-moved-shrink") params.min_moved_shrink_pct = args.Number(false, 0, 99.9);
+      else if (a == "--min-own-moved-shrink")
+        params.min_own_moved_shrink_pct = args.Number(false, 0, 99.9);
       else throw BadInput("unknown argument '" + a + "' (see diagnose_gap --help)");
     }
     params.simulate.frames = static_cast<int>(frames);

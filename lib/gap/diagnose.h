@@ -88,6 +88,14 @@ struct DiagnoseParams {
   // emitter holds their gap at 4 m, kept their −0.25 px offset out at 3.6–6.2 % pooled, 45–52 %
   // as a mean over the folds).
   double min_own_shrink_pct = 10;
+  // Or the same two shares read in the metrics the change moves (MovedShare): a range law
+  // judged against the range's gap, not against a gap in metrics it leaves alone. Their floors
+  // are higher, since chance fits earn their gain where they move. Chosen at seed 7 as the two
+  // above: the null tables' selections there removed at most 16 % of their part, the right
+  // effects' at least 31 %; an effect kept on a null table carried at most 23 % on its own,
+  // the right ones at least 38 %.
+  double min_moved_shrink_pct = 20;
+  double min_own_moved_shrink_pct = 30;
 
   bool IsValid(std::string* why) const;
 };
@@ -141,6 +149,9 @@ struct NestedFold {
   double simulated_calibrated_sq = NAN;
   double simulated_sq = NAN;  // Σz² with the whole selection simulated
   std::vector<double> effect_gain_simulated;
+  // The same gain as a share of the calibrated Σz² in the metrics the effect moves
+  // (MovedShare), per selected effect.
+  std::vector<double> effect_share_moved;
 };
 
 // A selected term's size without each fold's cells: the selection refitted on the other cells
@@ -179,7 +190,19 @@ struct Nested {
   // its selection added: what the selections earn where the simulator, not the fits'
   // interpolation, makes the prediction (NaN when not simulated).
   double gain_simulated = NAN;
+  // gain_simulated as a share of the calibrated Σz² in the metrics the selections move, over
+  // every fold's held-out cells (MovedShare; NaN when not simulated).
+  double share_moved = NAN;
 };
+
+// The share of the calibrated Σz² (of `calibrated`) that going from `without` to `with` removes,
+// read in the metrics the change moves: each metric's gain and calibrated Σz² weigh by the
+// change's own Σ(without − with)² in it,
+//   Σ_k m_k (Σ without² − Σ with²)_k / Σ_k m_k (Σ calibrated²)_k.
+// A range law moves the range metrics, and is judged there, not against a gap in metrics it
+// leaves alone. Over the observations finite in all three; NaN when nothing moves.
+double MovedShare(const std::vector<double>& without, const std::vector<double>& with,
+                  const std::vector<double>& calibrated, int metrics);
 
 // Effects that cannot be told apart on this table: one of them, with the size each would need.
 struct Ambiguity {

@@ -126,7 +126,10 @@ std::string LimitsMarkdown(const DiagnoseResult& r) {
     << Pct(100 * l.settings.min_own_share) << " of each fold's calibrated gap on its held-out "
        "cells"
     << (l.settings.pooled ? ", and " + Pct(100 * l.settings.min_share) + " of their sum" : "")
-    << ". The outer folds' agreement is asked too, so the diagnosis needs more still. \"far\" "
+    << "; or " << Pct(100 * l.settings.min_own_moved_share)
+    << (l.settings.pooled ? " and " + Pct(100 * l.settings.min_moved_share) : "")
+    << " of the gap's part in the metrics it moves, each weighing by how much it moves them. "
+       "The outer folds' agreement is asked too, so the diagnosis needs more still. \"far\" "
        "is the median bias the size adds at "
     << Num(l.far_distance_m) << " m.\n\n"
     << "| effect | axis | below (test; share) | far | above (test; share) | far | note |\n"

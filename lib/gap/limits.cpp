@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Dense>
 
@@ -138,16 +139,19 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
     };
     const double p = settings.min_share;
     const int folds = static_cast<int>(settings.fold_gap_sq.size());
-    const bool share_bar = folds > 0 && static_cast<int>(settings.fold.size()) == d.num_cells();
+    bool share_bar = folds > 0 && static_cast<int>(settings.fold.size()) == d.num_cells();
+    for (const auto& g : settings.fold_gap_sq)
+      share_bar = share_bar && static_cast<int>(g.size()) == k_count;
     auto score = [&](double coord, double* far_m) {
       u[on] = coord;
       Eigen::VectorXd delta(n_obs);
-      std::vector<double> gamma(folds, 0.0);
+      // γ[f][k]: the gain in fold f's metric k, the effect's own movement there.
+      std::vector<std::vector<double>> gamma(folds, std::vector<double>(k_count, 0.0));
       for (int j = 0; j < n_obs; ++j) {
         const size_t o = wh.w.obs[j];
         delta[j] = model.Delta(term, u, o);
         const int f = share_bar ? settings.fold[o / k_count] : -1;
-        if (f >= 0 && f < folds) gamma[f] += std::pow(delta[j] / model.noise(o), 2);
+        if (f >= 0 && f < folds) gamma[f][o % k_count] += std::pow(delta[j] / model.noise(o), 2);
       }
       const Eigen::VectorXd z = wh.Apply(delta);
       double lambda = z.squaredNorm();
@@ -163,18 +167,44 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
       Score sc;
       sc.test = std::sqrt(std::max(lambda, 0.0)) - out.z_needed;
       if (share_bar) {
-        double own = 0, gain = 0, whole = 0;
+        // Read in the whole gap: γ_f / (G_f + γ_f) per fold, Σγ / Σ(G + γ) pooled; and in the
+        // metrics the effect moves, each weighing by its movement γ_k (MovedShare):
+        // Σ_k γ_k² / Σ_k γ_k (G_k + γ_k), per fold and pooled. Either reading keeps it.
+        double own[2] = {0, 0};
         int counted = 0;
+        std::vector<double> pooled_gain(k_count, 0.0), pooled_gap(k_count, 0.0);
         for (int f = 0; f < folds; ++f) {
-          const double g = settings.fold_gap_sq[f];
-          if (!(g > 0)) continue;
-          own += gamma[f] / (g + gamma[f]);
-          gain += gamma[f];
-          whole += g + gamma[f];
+          double num = 0, den = 0, gain = 0, gap = 0;
+          for (int k = 0; k < k_count; ++k) {
+            const double g = settings.fold_gap_sq[f][k], y = gamma[f][k];
+            gain += y;
+            gap += g;
+            num += y * y;
+            den += y * (g + y);
+            pooled_gain[k] += y;
+            pooled_gap[k] += g + y;
+          }
+          if (!(gap > 0)) continue;
+          own[0] += gain / (gap + gain);
+          own[1] += den > 0 ? num / den : 0;
           ++counted;
         }
-        sc.share = counted ? own / counted - settings.min_own_share : -settings.min_own_share;
-        if (settings.pooled) sc.share = std::min(sc.share, whole > 0 ? gain / whole - p : -p);
+        double gain = 0, whole = 0, num = 0, den = 0;
+        for (int k = 0; k < k_count; ++k) {
+          gain += pooled_gain[k];
+          whole += pooled_gap[k];
+          num += pooled_gain[k] * pooled_gain[k];
+          den += pooled_gain[k] * pooled_gap[k];
+        }
+        const double pooled[2] = {whole > 0 ? gain / whole : 0, den > 0 ? num / den : 0};
+        const double need_own[2] = {settings.min_own_share, settings.min_own_moved_share};
+        const double need[2] = {p, settings.min_moved_share};
+        sc.share = -std::numeric_limits<double>::infinity();
+        for (int m = 0; m < 2; ++m) {
+          double v = (counted ? own[m] / counted : 0) - need_own[m];
+          if (settings.pooled) v = std::min(v, pooled[m] - need[m]);
+          sc.share = std::max(sc.share, v);
+        }
       }
       return sc;
     };
@@ -203,7 +233,10 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
       double prev_c = c0;
       Score prev;
       prev.test = -out.z_needed;
-      prev.share = share_bar ? -std::max(p, settings.min_own_share) : 0.0;
+      prev.share = share_bar ? -std::min(std::max(p, settings.min_own_share),
+                                         std::max(settings.min_moved_share,
+                                                  settings.min_own_moved_share))
+                             : 0.0;
       for (size_t i = 0; i < walk.size() && !(std::isfinite(at[0]) && std::isfinite(at[1]));
            ++i) {
         if (axis.discrete) term.discrete_node[0][on] = walk_node[i];
@@ -238,6 +271,39 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
     out.effects.push_back(lim);
   }
   return out;
+}
+
+void LimitsJson(records::JsonWriter& w, const DetectionLimits& l) {
+  w.BeginObject("detection_limits");
+  w.Number("power", l.settings.power).Number("z_needed", l.z_needed);
+  w.Number("min_share", l.settings.min_share).Number("min_own_share", l.settings.min_own_share);
+  w.Number("min_moved_share", l.settings.min_moved_share);
+  w.Number("min_own_moved_share", l.settings.min_own_moved_share);
+  w.Bool("pooled", l.settings.pooled).BeginArray("fold_gap_sq");  // [fold][metric]
+  for (const auto& f : l.settings.fold_gap_sq) {
+    w.BeginArray();
+    for (double g : f) w.Number(g);
+    w.EndArray();
+  }
+  w.EndArray();
+  w.Integer("observations", l.observations).Number("far_distance_m", l.far_distance_m);
+  w.BeginArray("effects");
+  for (const DetectionLimit& e : l.effects) {
+    w.BeginObject().String("effect", e.effect).String("param", e.param);
+    w.Number("neutral", e.neutral).Bool("discrete", e.discrete);
+    w.Bool("one_of_calibration", e.frozen != 0);
+    if (!e.other.empty()) w.BeginObject("held").Number(e.other, e.other_value).EndObject();
+    // Per side: null beyond the grid; absent where the grid does not extend that way.
+    const char* side_name[2] = {"below", "above"};
+    for (int side = 0; side < 2; ++side) {
+      if (!e.searched[side]) continue;
+      w.BeginObject(side_name[side]).Number("size", e.size[side]);
+      w.Number("by_test", e.by_test[side]).Number("by_share", e.by_share[side]);
+      w.Number("far_m", e.far_m[side]).EndObject();
+    }
+    w.EndObject();
+  }
+  w.EndArray().EndObject();
 }
 
 }  // namespace depthbias::gap

@@ -14,14 +14,19 @@
 //     them) and Λ their prior precisions (fit.h (3)): the calibration takes what it can. The
 //     test asks ΔBIC > 0, a drop beyond ln n for one parameter, so θ is found with chance P
 //     where √λ(θ) ≥ √(ln n) + Φ⁻¹(P).
-//  2. The share of the gap an effect must remove to be kept (DiagnoseParams::
-//     min_effect_shrink_pct and min_own_shrink_pct, p). Its gain in the gap's own units over a
-//     fold's held-out observations, γ_f(θ) = Σ (Δ(θ) / √(σ² + τ²))², against that fold's
-//     calibrated base G_f (Σz², the outer folds' as the keep rule reads them) once the effect is
-//     there: on average over the folds γ_f / (G_f + γ_f) ≥ p (its own part), and pooled,
-//     Σγ_f / Σ(G_f + γ_f) ≥ p (the selection's part, when nothing else is kept to carry it). On
-//     a table with a large unexplained gap only a large effect is kept. This holds for the mean
-//     gain; the draws of a table scatter about it.
+//  2. The share of the gap an effect must remove to be kept, read as the keep rule reads it
+//     (DiagnoseParams: min_effect_shrink_pct and min_own_shrink_pct, p, or in the metrics moved
+//     min_moved_shrink_pct and min_own_moved_shrink_pct, q). Its gain in the gap's own units
+//     over fold f's held-out observations of metric k, γ_fk(θ) = Σ (Δ(θ) / √(σ² + τ²))²,
+//     against that fold's calibrated base G_fk (Σz², the outer folds' as the keep rule reads
+//     them) once the effect is there. In the whole gap, s_f = γ_f / (G_f + γ_f) (sums over k);
+//     in the metrics it moves, each weighing by γ_fk (MovedShare, diagnose.h),
+//       m_f = Σ_k γ_fk² / Σ_k γ_fk (G_fk + γ_fk).
+//     It passes where, by either reading, the mean over the folds reaches its own floor and,
+//     when no other kept effect carries the selection's part, the same pooled over the folds
+//     (γ, G summed) reaches the selection's. On a table with a large unexplained gap only a
+//     large effect is kept; a gap in metrics it leaves alone raises only the whole reading's
+//     bar. This holds for the mean gain; the draws of a table scatter about it.
 //
 // The selection also asks the outer folds' agreement and each effect's own share, so these are
 // lower bounds of what the whole diagnosis needs (docs/gap/cases.md compares them with what the
@@ -37,6 +42,7 @@
 #include <vector>
 
 #include "gap/fit.h"
+#include "gap/json.h"
 
 namespace depthbias::gap {
 
@@ -64,10 +70,13 @@ struct LimitSettings {
   double power = 0.8;      // chance of finding an effect of the test's limit
   double min_share = 0.1;      // pooled share of the gap the selection must remove
   double min_own_share = 0.1;  // each fold's share an effect must remove, on average
-  // The outer folds: each cell's fold and each fold's calibrated Σz² on its held-out cells
-  // (G_f). Empty: bar 2 not applied.
+  // or both of these, read in the metrics the effect moves
+  double min_moved_share = 0.2;
+  double min_own_moved_share = 0.3;
+  // The outer folds: each cell's fold and each fold's calibrated Σz² on its held-out cells,
+  // per compared metric (G_f,k). Empty: bar 2 not applied.
   std::vector<int> fold;
-  std::vector<double> fold_gap_sq;
+  std::vector<std::vector<double>> fold_gap_sq;
   bool pooled = true;      // the pooled share too (false: another kept effect carries it)
 };
 
@@ -82,5 +91,8 @@ struct DetectionLimits {
 // Over the valid observations of the marked cells, at the model's dispersion and placement.
 DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<char>& cells,
                                     const LimitSettings& settings = {});
+
+// gap.json's "detection_limits" object.
+void LimitsJson(records::JsonWriter& w, const DetectionLimits& l);
 
 }  // namespace depthbias::gap

@@ -108,13 +108,14 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
       nf.simulated_sq = all_sq;
       // Each effect's own part: the selection simulated without it, the others at their values.
       for (size_t j = 0; j < sel.current.terms.size(); ++j) {
-        double without_sq = calibrated_sq;
+        std::vector<double> without = out.zsc;
         if (sel.current.terms.size() > 1) {
           ModelFit rest = sel.current;
           rest.terms.erase(rest.terms.begin() + static_cast<long>(j));
-          without_sq = SumSq(Scaled(model, simulate(rest)));
+          without = Scaled(model, simulate(rest));
         }
-        nf.effect_gain_simulated.push_back(without_sq - all_sq);
+        nf.effect_gain_simulated.push_back(SumSq(without) - all_sq);
+        nf.effect_share_moved.push_back(MovedShare(without, out.zs, out.zsc, kk));
       }
       nf.simulated = true;
     } catch (const std::exception& e) {
@@ -128,6 +129,25 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
 }
 
 }  // namespace
+
+double MovedShare(const std::vector<double>& without, const std::vector<double>& with,
+                  const std::vector<double>& calibrated, int metrics) {
+  std::vector<double> move(metrics, 0.0), gain(metrics, 0.0), gap(metrics, 0.0);
+  for (size_t o = 0; o < without.size() && o < with.size() && o < calibrated.size(); ++o) {
+    const double a = without[o], b = with[o], c = calibrated[o];
+    if (!std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c)) continue;
+    const size_t k = o % static_cast<size_t>(metrics);
+    move[k] += (a - b) * (a - b);
+    gain[k] += a * a - b * b;
+    gap[k] += c * c;
+  }
+  double num = 0, den = 0;
+  for (int k = 0; k < metrics; ++k) {
+    num += move[k] * gain[k];
+    den += move[k] * gap[k];
+  }
+  return den > 0 ? num / den : NAN;
+}
 
 Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams& base,
                  const DiagnoseParams& params, const std::vector<int>& fold, int num_folds,
@@ -190,6 +210,8 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
       const double a = n.z_simulated_calibrated[o], b = n.z_simulated[o];
       if (std::isfinite(a) && std::isfinite(b)) n.gain_simulated += a * a - b * b;
     }
+    n.share_moved = MovedShare(n.z_simulated_calibrated, n.z_simulated,
+                               n.z_simulated_calibrated, kk);
   }
   n.run = true;
   return n;

@@ -147,9 +147,11 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
     w.Number("deviance_selected", f.deviance_selected).Bool("simulated", f.simulated);
     w.Number("simulated_calibrated_sq", f.simulated_calibrated_sq);
     w.Number("simulated_sq", f.simulated_sq);
-    w.BeginArray("effect_gain_simulated");
-    for (double g : f.effect_gain_simulated) w.Number(g);
-    w.EndArray();
+    for (const auto* v : {&f.effect_gain_simulated, &f.effect_share_moved}) {
+      w.BeginArray(v == &f.effect_share_moved ? "effect_share_moved" : "effect_gain_simulated");
+      for (double g : *v) w.Number(g);
+      w.EndArray();
+    }
     w.EndObject();
   }
   w.EndArray();
@@ -162,7 +164,8 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
   } else {
     w.Null("simulated").Null("simulated_calibrated");
   }
-  w.Number("gain", n.gain).Number("gain_simulated", n.gain_simulated).EndObject();
+  w.Number("gain", n.gain).Number("gain_simulated", n.gain_simulated);
+  w.Number("share_moved", n.share_moved).EndObject();
 }
 
 void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
@@ -190,31 +193,7 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
     w.EndArray().EndObject();
   }
   w.EndArray();
-  const DetectionLimits& l = r.limits;
-  w.BeginObject("detection_limits");
-  w.Number("power", l.settings.power).Number("z_needed", l.z_needed);
-  w.Number("min_share", l.settings.min_share).Number("min_own_share", l.settings.min_own_share);
-  w.Bool("pooled", l.settings.pooled).BeginArray("fold_gap_sq");
-  for (double g : l.settings.fold_gap_sq) w.Number(g);
-  w.EndArray();
-  w.Integer("observations", l.observations).Number("far_distance_m", l.far_distance_m);
-  w.BeginArray("effects");
-  for (const DetectionLimit& e : l.effects) {
-    w.BeginObject().String("effect", e.effect).String("param", e.param);
-    w.Number("neutral", e.neutral).Bool("discrete", e.discrete);
-    w.Bool("one_of_calibration", e.frozen != 0);
-    if (!e.other.empty()) w.BeginObject("held").Number(e.other, e.other_value).EndObject();
-    // Per side: null beyond the grid; absent where the grid does not extend that way.
-    const char* side_name[2] = {"below", "above"};
-    for (int side = 0; side < 2; ++side) {
-      if (!e.searched[side]) continue;
-      w.BeginObject(side_name[side]).Number("size", e.size[side]);
-      w.Number("by_test", e.by_test[side]).Number("by_share", e.by_share[side]);
-      w.Number("far_m", e.far_m[side]).EndObject();
-    }
-    w.EndObject();
-  }
-  w.EndArray().EndObject();
+  LimitsJson(w, r.limits);
 }
 
 }  // namespace
@@ -262,6 +241,8 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   w.Number("absorb_r", p.absorb_r).Number("alpha", p.alpha);
   w.Number("min_effect_shrink_pct", p.min_effect_shrink_pct);
   w.Number("min_own_shrink_pct", p.min_own_shrink_pct);
+  w.Number("min_moved_shrink_pct", p.min_moved_shrink_pct);
+  w.Number("min_own_moved_shrink_pct", p.min_own_moved_shrink_pct);
   w.Integer("simulations", r.simulations);
   w.BeginArray("candidates");
   for (const auto& c : r.candidates) w.String(c.effect);

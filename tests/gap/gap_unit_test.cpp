@@ -619,6 +619,28 @@ LimitTable MakeLimitTable(std::uint32_t seed) {
   return t;
 }
 
+// The keep rule's share (MovedShare): two metrics, three observations each (observation o is
+// metric o % 2). The change moves metric 0 only: its share is that metric's, whatever gap
+// metric 1 holds (read as a share of the whole, a gap of 100 there would take it from 0.75 to
+// under 0.1). Moving both, each metric weighs by the change's Σ(without − with)² in it.
+TEST(KeepRule, TheShareIsReadInTheMetricsTheChangeMoves) {
+  const std::vector<double> without = {2, 5, 2, 5, 2, 5}, with = {1, 5, 1, 5, 1, 5};
+  // Metric 0: gain 3 × (4 − 1) = 9 of a gap of 12; metric 1: nothing moves.
+  EXPECT_NEAR(MovedShare(without, with, without, 2), 0.75, 1e-12);
+  std::vector<double> wider = without;
+  for (size_t o = 1; o < wider.size(); o += 2) wider[o] = 100;
+  EXPECT_NEAR(MovedShare(without, with, wider, 2), 0.75, 1e-12);
+  // Both moved: metric 1 from 5 to 4 (movement 3, gain 27 of 75); metric 0 as above
+  // (movement 3, gain 9 of 12): (3·9 + 3·27) / (3·12 + 3·75).
+  const std::vector<double> both = {1, 4, 1, 4, 1, 4};
+  EXPECT_NEAR(MovedShare(without, both, without, 2), (27.0 + 81) / (36 + 225), 1e-12);
+  // Non-finite observations are left out; nothing moved gives NaN.
+  std::vector<double> holes = with;
+  holes[0] = NAN;
+  EXPECT_NEAR(MovedShare(without, holes, without, 2), 6.0 / 8, 1e-12);
+  EXPECT_TRUE(std::isnan(MovedShare(without, without, without, 2)));
+}
+
 TEST(Limits, AtTheLimitTheFitGainsTheNoncentralityAskedAndTheGainTheShareAsks) {
   const LimitTable t = MakeLimitTable(31);
   FitSettings fs;
@@ -655,9 +677,10 @@ TEST(Limits, AtTheLimitTheFitGainsTheNoncentralityAskedAndTheGainTheShareAsks) {
   }
 
   // The share of the gap, with the table held out by distance (four folds): where the law's
-  // Σz² gain γ_f over each fold's observations, against the fold's calibrated Σz² G_f, averages
-  // γ_f / (G_f + γ_f) = p over the folds (its own part); pooled, Σγ_f / Σ(G_f + γ_f) = p too,
-  // the higher bar deciding.
+  // Σz² gain γ_f over each fold's observations, against the fold's calibrated Σz² G_f,
+  // averages γ_f / (G_f + γ_f) = p over the folds (its own part); pooled, Σγ_f / Σ(G_f + γ_f)
+  // = p too, the higher bar deciding. Read in the whole gap and in the metric the law moves,
+  // the lower size of the two.
   const int kk = t.d.num_metrics();
   std::vector<int> fold(t.d.num_cells());
   for (int c = 0; c < t.d.num_cells(); ++c)
@@ -673,39 +696,67 @@ TEST(Limits, AtTheLimitTheFitGainsTheNoncentralityAskedAndTheGainTheShareAsks) {
   // The last: a 16 m fold with almost no gap of its own, where the law's own part is won at
   // once and the pooled share decides.
   const std::vector<std::vector<double>> fold_gaps = {
-      {50, 100, 50, 150}, {2000, 4000, 2000, 6000}, {5000, 5000, 5000, 1}};
+      {50, 100, 50, 150}, {500, 1000, 500, 1500}, {1250, 1250, 1250, 0.25}};
+  // Each fold also holds three times that gap in metric 1, which the law leaves alone: the whole
+  // reading's G_f is 4 times the moved reading's. A floor of 0.99 turns a reading off.
   for (const std::vector<double>& gaps : fold_gaps) {
     const double scale = gaps[0];
+    ASSERT_GE(kk, 2);
     LimitSettings ls;
     ls.fold = fold;
-    ls.fold_gap_sq = gaps;
+    for (double g : gaps) {
+      ls.fold_gap_sq.emplace_back(kk, 0.0);
+      ls.fold_gap_sq.back()[0] = g;
+      ls.fold_gap_sq.back()[1] = 3 * g;
+    }
     ls.pooled = false;
+    LimitSettings whole_only = ls, moved_only = ls;
+    whole_only.min_moved_share = whole_only.min_own_moved_share = 0.99;
+    moved_only.min_share = moved_only.min_own_share = 0.99;
+    // The mean over the folds of γ_f / (G_f + γ_f) at a size, G_f read in metric 0 alone
+    // (times 1) or in the whole (times 4).
+    auto mean_share = [&](double delta, double times) {
+      const std::vector<double> g = gains(delta);
+      double mean = 0;
+      for (int f = 0; f < 4; ++f) mean += g[f] / (times * gaps[f] + g[f]) / 4;
+      return mean;
+    };
+    const DetectionLimit by_whole = FindDetectionLimits(model, all, whole_only).effects[0];
+    const DetectionLimit by_moved = FindDetectionLimits(model, all, moved_only).effects[0];
     const DetectionLimit own = FindDetectionLimits(model, all, ls).effects[0];
-    ASSERT_TRUE(std::isfinite(own.by_share[1])) << scale;
-    std::vector<double> g = gains(own.by_share[1]);
-    double mean = 0;
-    for (int f = 0; f < 4; ++f) mean += g[f] / (ls.fold_gap_sq[f] + g[f]) / 4;
-    EXPECT_NEAR(mean, ls.min_own_share, 2e-3) << scale;
+    ASSERT_TRUE(std::isfinite(by_whole.by_share[1]) && std::isfinite(by_moved.by_share[1]))
+        << scale;
+    EXPECT_NEAR(mean_share(by_whole.by_share[1], 4), ls.min_own_share, 2e-3) << scale;
+    EXPECT_NEAR(mean_share(by_moved.by_share[1], 1), ls.min_own_moved_share, 2e-3) << scale;
+    EXPECT_NEAR(own.by_share[1], std::min(by_whole.by_share[1], by_moved.by_share[1]), 1e-9)
+        << "either reading keeps it";
     EXPECT_NEAR(own.by_test[1], e.size[1], 1e-9);
     EXPECT_EQ(own.size[1], std::max(own.by_test[1], own.by_share[1])) << scale;
+    // The gap in metric 1 raises the whole reading's bar only.
+    LimitSettings here = moved_only;
+    for (auto& f : here.fold_gap_sq) f[1] = 0;
+    EXPECT_NEAR(FindDetectionLimits(model, all, here).effects[0].by_share[1],
+                by_moved.by_share[1], 1e-9);
 
-    ls.pooled = true;
-    const DetectionLimit both = FindDetectionLimits(model, all, ls).effects[0];
-    g = gains(both.by_share[1]);
+    // Pooled too (the whole reading): Σγ_f / Σ(G_f + γ_f) reaches the selection's floor where
+    // it is the higher bar.
+    whole_only.pooled = true;
+    const DetectionLimit both = FindDetectionLimits(model, all, whole_only).effects[0];
+    const std::vector<double> g = gains(both.by_share[1]);
     double gain = 0, whole = 0;
-    mean = 0;
     for (int f = 0; f < 4; ++f) {
       gain += g[f];
-      whole += ls.fold_gap_sq[f] + g[f];
-      mean += g[f] / (ls.fold_gap_sq[f] + g[f]) / 4;
+      whole += 4 * gaps[f] + g[f];
     }
-    EXPECT_GE(both.by_share[1], own.by_share[1] - 1e-9);
+    EXPECT_GE(both.by_share[1], by_whole.by_share[1] - 1e-9);
     if (gaps[3] < 10) {
-      EXPECT_GT(both.by_share[1], 2 * own.by_share[1]) << "the pooled share";
+      EXPECT_GT(both.by_share[1], 2 * by_whole.by_share[1]) << "the pooled share";
     }
-    EXPECT_NEAR(std::min(mean, gain / whole), ls.min_share, 2e-3) << scale;
-    std::printf("fold gaps from %g: by its own share %.4f px, pooled too %.4f px\n", scale,
-                own.by_share[1], both.by_share[1]);
+    EXPECT_NEAR(std::min(mean_share(both.by_share[1], 4), gain / whole), ls.min_share, 2e-3)
+        << scale;
+    std::printf("fold gaps from %g: by the whole's share %.4f px (pooled too %.4f px), "
+                "by the moved metrics' %.4f px\n",
+                scale, by_whole.by_share[1], both.by_share[1], by_moved.by_share[1]);
   }
 
   // Without placement scatter every recording is its own piece of evidence: a smaller limit.

@@ -544,6 +544,40 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
               offset->size[0], offset->by_test[0], offset->by_share[0], offset->far_m[0]);
 }
 
+// The article's 128 real rows. Their held-out gap sits in the emitter's valid_pct and the 4 m
+// plane_std, not in the range. Read as a share of that whole gap alone, no depth scale within
+// the simulated grid (up to +12 %, 1.8 m far at 16 m) would be kept: the keep rule judged a range
+// law against metrics it cannot move. Read in the metrics it moves too, a depth scale that
+// over-reads is kept from +9.3 % (1.4 m at 16 m) and an offset from −0.555 px (2.4 m), measured
+// with the diagnosis's defaults; whole-gap reading alone: −0.713 px (3.3 m).
+TEST(Article, ARangeLawIsJudgedInTheMetricsItMoves) {
+  std::vector<records::PanelMetrics> rows =
+      io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
+  ASSERT_EQ(rows.size(), 128u);
+  const sim::SimParams base = Base();
+  ScreenRows(DesignRulesOf(base.sensor), &rows);
+  DiagnoseParams params;
+  params.simulate.threads = 2;
+  const DiagnoseResult r = Diagnose(rows, base, params);
+  ASSERT_TRUE(r.success) << r.message;
+  EXPECT_TRUE(r.selected.terms.empty()) << "nothing is kept on the article's table";
+  const DetectionLimit* scale = nullptr;
+  const DetectionLimit* offset = nullptr;
+  for (const DetectionLimit& e : r.limits.effects) {
+    if (e.effect == "depth_scale") scale = &e;
+    if (e.effect == "disparity_offset") offset = &e;
+  }
+  ASSERT_TRUE(scale && offset);
+  ASSERT_TRUE(std::isfinite(scale->size[1])) << "a depth scale that over-reads goes unseen";
+  EXPECT_LT(scale->far_m[1], 1.8);
+  EXPECT_GT(scale->far_m[1], 0.5) << "a table with 1.3 m of placement scatter at 16 m";
+  ASSERT_TRUE(std::isfinite(offset->size[0]));
+  EXPECT_LT(offset->far_m[0], 3.0);
+  std::printf("article: depth_scale kept from %+.4f (%.2f m at 16 m), disparity_offset from "
+              "%.3f px (%.2f m)\n",
+              scale->size[1], scale->far_m[1], offset->size[0], offset->far_m[0]);
+}
+
 // Cases that pass at four or five of the seeds 1–5 (docs/gap/cases.md, "Over five seeds"), at
 // two of those seeds, run as scripts/gap_cases.sh runs them (the tables at S + 999 + index, the
 // diagnosis at S, 10 frames a cell): among them one where an extra effect rode beside the right
