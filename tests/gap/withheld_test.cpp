@@ -493,6 +493,26 @@ TEST(Cases, AnOffsetADriftExplainsIsNamedWithIt) {
   EXPECT_EQ(folds.find("\"disparity_offset\""), std::string::npos) << folds;
 }
 
+// A table read as diagnose_gap reads it (its rows screened by the sensor's design rules) and
+// diagnosed with the defaults on 2 threads.
+DiagnoseResult DiagnoseCsv(const std::string& csv, size_t expected_rows,
+                           std::vector<records::PanelMetrics>* rows) {
+  *rows = io::ReadMetricsCsv(csv);
+  EXPECT_EQ(rows->size(), expected_rows) << csv;
+  const sim::SimParams base = Base();
+  ScreenRows(DesignRulesOf(base.sensor), rows);
+  DiagnoseParams params;
+  params.simulate.threads = 2;
+  return Diagnose(*rows, base, params);
+}
+
+// The named effect's detection limits (nullptr if not a candidate).
+const DetectionLimit* LimitOf(const DiagnoseResult& r, const std::string& effect) {
+  for (const DetectionLimit& e : r.limits.effects)
+    if (e.effect == effect) return &e;
+  return nullptr;
+}
+
 // A user's own unit recorded by a renderer that is not the simulator's: 32 bags of field scenes
 // (scripts/make_field_campaign.py --seed 11: a disparity offset of −0.25 px, every test point
 // placed off by 2 % of its distance, a projector that adds no texture) through panel_extract
@@ -502,17 +522,12 @@ TEST(Cases, AnOffsetADriftExplainsIsNamedWithIt) {
 // most of the gap; the offset must still be kept on its own part in each held-out distance,
 // its size within 20 %, and the emitter gain named at 0: the field case's own criteria.
 TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
-  const std::string csv = DEPTHBIAS_SOURCE_DIR "/tests/data/field_unit_seed11.csv";
-  std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(csv);
-  ASSERT_EQ(rows.size(), 32u);
-  const sim::SimParams base = Base();
-  ScreenRows(DesignRulesOf(base.sensor), &rows);
-  DiagnoseParams params;
-  params.simulate.threads = 2;
-  const DiagnoseResult r = Diagnose(rows, base, params);
+  std::vector<records::PanelMetrics> rows;
+  const DiagnoseResult r =
+      DiagnoseCsv(DEPTHBIAS_SOURCE_DIR "/tests/data/field_unit_seed11.csv", 32, &rows);
   ASSERT_TRUE(r.success) << r.message;
-  const std::string json = GapJson(r, params, ReportContext{"field_unit_seed11.csv", "", "", "",
-                                                            base.seed, "test"});
+  const std::string json = GapJson(r, DiagnoseParams(), ReportContext{"field_unit_seed11.csv", "",
+                                                                      "", "", Base().seed, "test"});
   const CaseOutcome o = JudgeCase(json, FieldCampaignCase(), rows);
   // The summary's first line, for a safety engineer: the range error in metres and its
   // direction before any effect. At 16 m a −0.25 px offset reads 1.1 m far on the axis and
@@ -532,9 +547,7 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
   // alone at least 0.03 px: 32 rows under 2 % placement scatter are not a lab).
   const size_t second = summary.find('\n') + 1;
   EXPECT_EQ(summary.compare(second, 28, "could go unseen: at 16 m, ov"), 0) << summary;
-  const DetectionLimit* offset = nullptr;
-  for (const DetectionLimit& e : r.limits.effects)
-    if (e.effect == "disparity_offset") offset = &e;
+  const DetectionLimit* offset = LimitOf(r, "disparity_offset");
   ASSERT_NE(offset, nullptr);
   EXPECT_LT(offset->size[0], -0.03);
   EXPECT_GT(offset->size[0], -0.25) << "the −0.25 px offset was kept";
@@ -551,22 +564,13 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
 // over-reads is kept from +9.3 % (1.4 m at 16 m) and an offset from −0.555 px (2.4 m), measured
 // with the diagnosis's defaults; whole-gap reading alone: −0.713 px (3.3 m).
 TEST(Article, ARangeLawIsJudgedInTheMetricsItMoves) {
-  std::vector<records::PanelMetrics> rows =
-      io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
-  ASSERT_EQ(rows.size(), 128u);
-  const sim::SimParams base = Base();
-  ScreenRows(DesignRulesOf(base.sensor), &rows);
-  DiagnoseParams params;
-  params.simulate.threads = 2;
-  const DiagnoseResult r = Diagnose(rows, base, params);
+  std::vector<records::PanelMetrics> rows;
+  const DiagnoseResult r =
+      DiagnoseCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv", 128, &rows);
   ASSERT_TRUE(r.success) << r.message;
   EXPECT_TRUE(r.selected.terms.empty()) << "nothing is kept on the article's table";
-  const DetectionLimit* scale = nullptr;
-  const DetectionLimit* offset = nullptr;
-  for (const DetectionLimit& e : r.limits.effects) {
-    if (e.effect == "depth_scale") scale = &e;
-    if (e.effect == "disparity_offset") offset = &e;
-  }
+  const DetectionLimit* scale = LimitOf(r, "depth_scale");
+  const DetectionLimit* offset = LimitOf(r, "disparity_offset");
   ASSERT_TRUE(scale && offset);
   ASSERT_TRUE(std::isfinite(scale->size[1])) << "a depth scale that over-reads goes unseen";
   EXPECT_LT(scale->far_m[1], 1.8);
