@@ -10,8 +10,9 @@ holds the injected size, read from each case's gap.json (DIR/seed-S/cases/): the
 gap.json gives, and the fit's own (`over_folds.ci95_fit`, where the refits widened it); an
 effect fitted per scenario counts once per scenario. Last, for each case of one effect of one
 parameter injected in every cell, its size against the detection limit on that side that each
-seed's table gives (gap.json `detection_limits`: found with 80 % chance by the fit's own test),
-and at how many seeds the effect was found (selected, or named as one of a confounded set).
+seed's table gives (gap.json `detection_limits`: the higher of the fit's own test, 80 % power,
+and the share of the gap the keep rule asks, read in the whole gap or in the metrics the effect
+moves; the test's alone in its own column), and at how many seeds the effect was found (selected, or named as one of a confounded set).
 The limit of reference is the median over the tables without effect of the same runs (where
 the case has their number of observations): the campaign's, not swollen by the effect itself.
 
