@@ -147,12 +147,11 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
     w.Number("deviance_selected", f.deviance_selected).Bool("simulated", f.simulated);
     w.Number("simulated_calibrated_sq", f.simulated_calibrated_sq);
     w.Number("simulated_sq", f.simulated_sq);
-    for (const auto* v : {&f.effect_gain_simulated, &f.effect_share_moved}) {
-      w.BeginArray(v == &f.effect_share_moved ? "effect_share_moved" : "effect_gain_simulated");
-      for (double g : *v) w.Number(g);
-      w.EndArray();
-    }
-    w.EndObject();
+    w.BeginArray("effect_gain_simulated");
+    for (double g : f.effect_gain_simulated) w.Number(g);
+    w.EndArray().BeginArray("effect_share_moved");
+    for (double g : f.effect_share_moved) w.Number(g);
+    w.EndArray().EndObject();
   }
   w.EndArray();
   GapJsonStat(w, "baseline", r, n.baseline);
