@@ -90,7 +90,7 @@ def coverage(path, case, injected):
         folds = sel.get("over_folds") or {}
         if sel.get("scope") == "shared":
             groups = [((sel.get("ci95") or {}).get(param), folds)]
-        else:  # per scenario: each scenario's interval
+        else:  # per light or per scenario: each group's interval
             groups = [(((sel.get("ci95") or {}).get(s) or {}).get(param), folds.get(s) or {})
                       for s in (sel.get("ci95") or {})]
         for ci, spread in groups:

@@ -207,12 +207,13 @@ def heatmaps(values, out, title, note, labels=None):
 
 
 def params_text(effect):
-    """'p = v [lo, hi]' of a shared effect; 'per scenario' otherwise (the report has them)."""
+    """'p = v [lo, hi]' of a shared effect; 'per light' or 'per scenario' otherwise (the report
+    has them)."""
     params, ci = effect.get("params"), effect.get("ci95")
     if not isinstance(params, dict) or not params:
         return ""
-    if effect.get("scope") == "per_scenario":
-        return "per scenario (values in report.md)"
+    if effect.get("scope") in ("per_light", "per_scenario"):
+        return effect["scope"].replace("_", " ") + " (values in report.md)"
     parts = []
     for p, v in params.items():
         if not is_number(v):

@@ -12,6 +12,11 @@
 namespace depthbias::gap {
 namespace {
 
+// The light of a scenario "light/preset".
+std::string LightOf(const std::string& scenario) {
+  return scenario.substr(0, scenario.rfind('/'));
+}
+
 // A JSON value, read by a small recursive-descent parser (gap.json is ours: no streaming).
 struct Json {
   enum Type { kNull, kBool, kNumber, kString, kArray, kObject } type = kNull;
@@ -248,11 +253,13 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   auto fail = [&](const std::string& why) { o.why += (o.why.empty() ? "" : "; ") + why; };
   // Selected set.
   std::map<std::string, const Json*> fitted;
+  std::map<std::string, std::string> scope;  // "shared", "per_light", "per_scenario"
   if (const Json* sel = root.Find("selected"))
     for (const Json& s : sel->items)
       if (const Json* name = s.Find("name")) {
         o.selected.push_back(name->text);
         fitted[name->text] = s.Find("params");
+        if (const Json* sc = s.Find("scope")) scope[name->text] = sc->text;
       }
   std::set<std::string> want, got(o.selected.begin(), o.selected.end());
   for (const Injection& in : truth.injected) want.insert(in.effect);
@@ -305,11 +312,22 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
             if (const Json* nm = e.Find("scenario")) order.push_back(nm->text);
       const Axis& axis = cand->axes[0];
       const std::vector<double>& v = al->second;
+      // One value per light (in the scenarios' order of first sight), where it has that many.
+      std::vector<std::string> lights;
+      for (const std::string& sc : order)
+        if (std::find(lights.begin(), lights.end(), LightOf(sc)) == lights.end())
+          lights.push_back(LightOf(sc));
+      const bool per_light = v.size() > 1 && v.size() != order.size() && v.size() == lights.size();
       std::string shown;
       double err_max = v.empty() ? INFINITY : 0.0;
       for (size_t i = 0; i < order.size(); ++i) {
         const Truth t = TruthIn(in, order[i], axis);
-        const double got_v = v.size() == 1 ? v[0] : i < v.size() ? v[i] : NAN;
+        const size_t light = static_cast<size_t>(
+            std::find(lights.begin(), lights.end(), LightOf(order[i])) - lights.begin());
+        const double got_v = v.size() == 1 ? v[0]
+                             : per_light   ? v[light]
+                             : i < v.size() ? v[i]
+                                            : NAN;
         const double scale = std::isfinite(axis.neutral) && t.value != axis.neutral
                                  ? std::fabs(t.value - axis.neutral)
                                  : 1.0;
@@ -329,8 +347,9 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
       continue;
     }
     const Json& params = *it->second;
-    const bool per_scenario = !params.members.empty() &&
-                              params.members.front().second.type == Json::kObject;
+    const bool grouped = !params.members.empty() &&
+                         params.members.front().second.type == Json::kObject;
+    const std::string scope_text = scope.count(in.effect) ? scope[in.effect] : "";
     std::string shown;
     for (const Axis& axis : cand->axes) {
       double scale = 0;
@@ -344,19 +363,24 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
       for (const std::string& sc : scenarios) {
         const Truth t = TruthIn(in, sc, axis);
         if (!std::isfinite(t.value)) continue;  // a shape parameter where the effect is absent
-        const Json* group = per_scenario ? params.Find(sc) : &params;
+        // Per scenario: the scenario's values; per light: its light's.
+        const std::string key = params.Find(sc) ? sc : LightOf(sc);
+        const Json* group = grouped ? params.Find(key) : &params;
         const Json* v = group ? group->Find(axis.param) : nullptr;
         const double got_v = v && v->type == Json::kNumber ? v->number : NAN;
         double err = std::fabs(got_v - t.value) / scale;
         if (axis.discrete) err = got_v == t.value ? 0.0 : INFINITY;
         if (!std::isfinite(got_v)) err = INFINITY;
         o.max_rel_error = std::max(o.max_rel_error, err);
-        if (per_scenario || shown.find(axis.param) == std::string::npos)
-          shown += (shown.empty() ? "" : ", ") + (per_scenario ? sc + " " : "") + axis.param +
-                   " " + Num(got_v);
+        const std::string item = (grouped ? key + " " : "") + axis.param + " " + Num(got_v);
+        if (grouped ? shown.find(item) == std::string::npos
+                    : shown.find(axis.param) == std::string::npos)
+          shown += (shown.empty() ? "" : ", ") + item;
       }
     }
-    o.recovered[in.effect] = (per_scenario ? "per scenario: " : "") + shown;
+    std::string prefix = grouped ? scope_text + ": " : "";
+    std::replace(prefix.begin(), prefix.end(), '_', ' ');
+    o.recovered[in.effect] = prefix + shown;
   }
   if (!truth.injected.empty() && !(o.max_rel_error <= 0.2))
     fail("a size is off by more than 20 %");

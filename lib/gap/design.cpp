@@ -212,7 +212,12 @@ bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
     const std::string scenario = r.light + "/" + r.preset;
     auto it = std::find(d.scenario_names.begin(), d.scenario_names.end(), scenario);
     d.scenario.push_back(static_cast<int>(it - d.scenario_names.begin()));
-    if (it == d.scenario_names.end()) d.scenario_names.push_back(scenario);
+    if (it == d.scenario_names.end()) {
+      d.scenario_names.push_back(scenario);
+      auto light = std::find(d.light_names.begin(), d.light_names.end(), r.light);
+      d.scenario_light.push_back(static_cast<int>(light - d.light_names.begin()));
+      if (light == d.light_names.end()) d.light_names.push_back(r.light);
+    }
     d.cells.push_back(c);
     d.row.push_back(static_cast<int>(i));
     d.bag.push_back(r.bag);

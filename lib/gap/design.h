@@ -69,6 +69,8 @@ struct Design {
   std::vector<std::string> bag;            // each cell's row id
   std::vector<std::string> scenario_names; // "daylight/HA", in first-seen order
   std::vector<int> scenario;               // each cell's scenario
+  std::vector<std::string> light_names;    // "daylight", in first-seen order
+  std::vector<int> scenario_light;         // each scenario's light
   std::vector<int> metrics;                // compared metrics (Metric values)
   std::vector<double> real;                // [cell·K + k], K = metrics.size(); NaN: missing
   std::vector<std::array<int, 2>> pairs;   // emitter on and off cells of one test point
@@ -77,6 +79,7 @@ struct Design {
   int num_cells() const { return static_cast<int>(cells.size()); }
   int num_metrics() const { return static_cast<int>(metrics.size()); }
   int num_scenarios() const { return static_cast<int>(scenario_names.size()); }
+  int num_lights() const { return static_cast<int>(light_names.size()); }
 };
 
 // What a row must be for the simulator to stand for it, from the sensor (DesignRulesOf). A row

@@ -224,7 +224,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   r.configured = sims.sensor.scenarios;
   r.calibrated = sims.sensor.scenarios;
   {
-    const auto per = SelectedParams(sims, sim::SimParams(), m0, design.num_scenarios());
+    const auto per = SelectedParams(sims, sim::SimParams(), m0, design);
     for (int s = 0; s < design.num_scenarios(); ++s)
       r.calibrated[s] = per[s].sensor.scenarios[s];
   }
@@ -419,7 +419,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   if (params.verify) {
     try {
       const std::vector<double> v = SimulateValues(
-          SelectedParams(sims, base, current, design.num_scenarios()), design, params.simulate);
+          SelectedParams(sims, base, current, design), design, params.simulate);
       r.z_verified = Scaled(model, v);
       r.verified_in = Stat(model, r.z_verified, all);
       r.verified = true;

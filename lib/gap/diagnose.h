@@ -13,7 +13,9 @@
 //     (localize.h).
 //  3. Which: the calibrated base (the sensor's σ_d and hole probability per scenario moved within
 //     their prior, fit.h) is the reference; every candidate is fitted alone with it, its
-//     parameters shared or one set per scenario (the better by BIC), ranked by
+//     parameters shared, one set per light or one per scenario (Scope: the best by BIC, a set
+//     per group kept only where it also beats the shared fit held out by one standard
+//     error), ranked by
 //     ΔBIC = D(reference) − D(effect) − k·ln n and by its held-out gain (the reference's held-out
 //     deviance minus its own); each metric's dispersion φ (≥ 1: how much wider than the
 //     replicates' noise and placement its residuals are about the widest model, every
@@ -34,7 +36,7 @@
 //     the outer folds' selections gain on their held-out cells as simulated (as the fits
 //     predict them only where the folds were not simulated). A selected term's 95 %
 //     interval is the wider of its fit's and the spread of its refits without each fold
-//     (SizeSpread); a term fitted per scenario gets one per scenario.
+//     (SizeSpread); a term fitted per light or scenario gets one per group.
 //  5. What is left: the cells still significant after the selected effects; when they are,
 //     where the rest lies (factor cells), its size and its form (∝ D, ∝ D², a step from a
 //     distance on, one test point), never pinned on a registered effect that did not earn
@@ -110,10 +112,13 @@ struct GapStat {
 
 struct EffectResult {
   std::string name;
-  bool per_scenario = false;        // kept per scenario: better by ΔBIC and held out
+  // Shared, or per light or scenario where that scope is the best by ΔBIC and beats the
+  // shared fit held out by one standard error (BeatsByOneSe).
+  Scope scope = Scope::kShared;
   TermFit fit;
   double delta_bic = 0;             // of the version kept, against the calibrated base
-  double delta_bic_shared = 0, delta_bic_per_scenario = 0;
+  // Each scope's; −∞ where it does not apply to the table (one light, one scenario).
+  double delta_bic_shared = 0, delta_bic_per_light = 0, delta_bic_per_scenario = 0;
   double heldout_gain = 0;          // held-out deviance of the calibrated base minus its own
   GapStat in_sample, heldout;
   double shrink_in_sample_pct = 0;  // of the baseline gap (base sensor as configured)
@@ -130,7 +135,7 @@ struct Confounded {
 
 struct SelectionStep {
   std::string effect;
-  bool per_scenario = false;
+  Scope scope = Scope::kShared;
   double delta_bic = 0;
   double heldout_gain = 0;
 };

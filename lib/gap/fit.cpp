@@ -320,7 +320,8 @@ class GapCost : public ceres::CostFunction {
 
 }  // namespace
 
-double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells) const {
+double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells,
+                              std::map<long long, double>* per_unit) const {
   const int k_count = num_metrics();
   std::vector<size_t> obs;
   for (size_t o = 0; o < mu.size(); ++o)
@@ -329,6 +330,7 @@ double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<c
   double sum = 0;
   for (size_t b = 0; b + 1 < w.starts.size(); ++b) {
     const int st = w.starts[b], n = w.starts[b + 1] - st;
+    double block = 0;
     for (int r = 0; r < n; ++r) {
       double e = 0;
       for (int c = 0; c <= r; ++c) {
@@ -338,6 +340,11 @@ double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<c
       double d;
       const double rr = Robust(e, settings_.huber_k, &d);
       sum += rr * rr;
+      block += rr * rr;
+    }
+    if (per_unit) {
+      const size_t o = w.obs[st];
+      (*per_unit)[block_[o] >= 0 ? block_[o] : -1 - static_cast<long long>(o / k_count)] += block;
     }
   }
   return sum;
@@ -383,7 +390,7 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
     if (start)
       for (const TermFit& tf : start->terms)
         if (tf.term.candidate == terms[t].candidate &&
-            tf.term.per_scenario == terms[t].per_scenario)
+            tf.term.scope == terms[t].scope)
           from = &tf;
     coords[t].assign(groups, std::vector<double>(cand.axes.size(), 0.0));
     for (int g = 0; g < groups; ++g)

@@ -7,8 +7,9 @@
 //   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)                   (1)
 //   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · (diag(σ²) + τ_k(D_t)² · 11ᵀ)                          (2)
 // Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
-// the term's group of the cell (one shared group, or the cell's scenario); n_s the scenario's
-// calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J simulated at the base;
+// the term's group of the cell (one shared group, the cell's light or its scenario: Scope); n_s
+// the scenario's calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J
+// simulated at the base;
 // σ the replicate noise (noise.h), τ the placement scatter of the test point t the recordings
 // share (placement.h: one random effect per test point and metric, so the recordings of one
 // placement count as one piece of evidence, not four), and φ_k the metric's dispersion (how
@@ -21,6 +22,7 @@
 
 #include <array>
 #include <cmath>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -40,11 +42,24 @@ struct FitSettings {
   bool IsValid(std::string* why) const;
 };
 
+// Which cells share an effect's parameters: every cell (one group), the cells of one light
+// (sunlight that heats the unit or floods the sensor acts in both presets alike), or of one
+// scenario (light × preset).
+enum class Scope { kShared, kPerLight, kPerScenario };
+const char* ScopeName(Scope scope);  // "shared", "per_light", "per_scenario"
+// The scope's groups in a design, the group of a scenario, and a group's name ("all",
+// "daylight", "daylight/HA").
+int ScopeGroups(const Design& design, Scope scope);
+int ScopeGroupOf(const Design& design, Scope scope, int scenario);
+std::string ScopeGroupName(const Design& design, Scope scope, int group);
+// The scope applies: more than one group, and (per light) fewer lights than scenarios.
+bool ScopeApplies(const Design& design, Scope scope);
+
 // One effect in a model: a candidate (index into the simulations' surfaces), its parameters
-// shared by every cell or one set per scenario, and the node of each discrete axis.
+// shared by every cell or one set per group of its scope, and the node of each discrete axis.
 struct Term {
   int candidate = 0;
-  bool per_scenario = false;
+  Scope scope = Scope::kShared;
   // [group][axis]: the node index of a discrete axis, −1 for a continuous one; one row serves
   // every group.
   std::vector<std::vector<int>> discrete_node;
@@ -141,7 +156,10 @@ class GapModel {
   // Prediction μ (1) of every observation under a fit (every cell, fitted or not).
   std::vector<double> Predict(const ModelFit& fit) const;
   // Σ 2ρ(r) over the valid observations of the cells marked in `cells`.
-  double DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells) const;
+  // With `per_unit`, also each independent unit's part, keyed by unit: a test point (the
+  // placement its recordings share), or a recording without one (key −1 − cell).
+  double DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells,
+                      std::map<long long, double>* per_unit = nullptr) const;
 
  private:
   const Design& design_;
@@ -163,8 +181,9 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
 
 // One candidate alone: every grid node is tried (the calibration solved in closed form, plain
 // squares), and FitTerms refines from the best starts: the lowest local minima of that profile
-// (shared), or each scenario's best node and the shared fit's values when given (per scenario).
-ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
+// (shared), or each group's best node and the shared fit's values when given (per light or
+// scenario).
+ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
                       const std::vector<char>& train, const ModelFit* shared = nullptr);
 
 // Held-out predictions: each fold's cells predicted by the terms refitted on the other cells

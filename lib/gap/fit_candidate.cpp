@@ -37,7 +37,7 @@ double ProfiledValue(const ScenarioProfile& p, int s, const FitSettings& fs, int
 
 }  // namespace
 
-ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
+ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
                       const std::vector<char>& train, const ModelFit* shared) {
   const Design& d = model.design();
   const Surface& surf = model.surface(candidate);
@@ -77,12 +77,17 @@ ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
 
   // Starting points. Shared: every local minimum of the profile over the grid (neighbours along
   // the continuous axes; an effect whose spreads are even in its sign has one on either side;
-  // the absent effect once), the three lowest. Per scenario: each group's best node (discrete
-  // axes included), and the shared fit's values.
+  // the absent effect once), the three lowest. Per light or scenario: each group's best node
+  // (discrete axes included), and the shared fit's values.
   std::vector<int> discrete_axes;
   for (size_t a = 0; a < cand.axes.size(); ++a)
     if (cand.axes[a].discrete) discrete_axes.push_back(static_cast<int>(a));
-  const int groups = per_scenario ? scenarios : 1;
+  const int groups = ScopeGroups(d, scope);
+  // Each group's profile: the sum over its scenarios.
+  std::vector<std::vector<double>> group_value(surf.num_nodes, std::vector<double>(groups, 0.0));
+  for (int node = 0; node < surf.num_nodes; ++node)
+    for (int sc = 0; sc < scenarios; ++sc)
+      group_value[node][ScopeGroupOf(d, scope, sc)] += value[node][sc];
   struct Option {
     std::vector<std::vector<int>> discrete_node;  // [group][axis]
     double value = 0;
@@ -101,7 +106,7 @@ ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
     return d;
   };
   std::vector<Option> options;
-  if (!per_scenario) {
+  if (scope == Scope::kShared) {
     std::vector<double> total(surf.num_nodes, 0.0);
     for (int node = 0; node < surf.num_nodes; ++node)
       for (int sc = 0; sc < scenarios; ++sc) total[node] += value[node][sc];
@@ -127,8 +132,8 @@ ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
     for (int g = 0; g < groups; ++g) {
       int best_node = 0;
       for (int node = 1; node < surf.num_nodes; ++node)
-        if (value[node][g] < value[best_node][g]) best_node = node;
-      opt.value += value[best_node][g];
+        if (group_value[node][g] < group_value[best_node][g]) best_node = node;
+      opt.value += group_value[best_node][g];
       opt.discrete_node.push_back(discrete_of(best_node));
       opt.values.push_back(node_values(best_node));
     }
@@ -142,7 +147,7 @@ ModelFit FitCandidate(const GapModel& model, int candidate, bool per_scenario,
 
   ModelFit best;
   for (const Option& opt : options) {
-    Term term{candidate, per_scenario, opt.discrete_node};
+    Term term{candidate, scope, opt.discrete_node};
     ModelFit start;
     TermFit tf;
     tf.term = term;
@@ -177,10 +182,10 @@ HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
     if (terms.empty()) {
       fit = FitTerms(model, {}, train);
     } else if (terms.size() == 1) {
-      const ModelFit shared = terms[0].per_scenario
-                                  ? FitCandidate(model, terms[0].candidate, false, train)
+      const ModelFit shared = terms[0].scope != Scope::kShared
+                                  ? FitCandidate(model, terms[0].candidate, Scope::kShared, train)
                                   : ModelFit();
-      fit = FitCandidate(model, terms[0].candidate, terms[0].per_scenario, train, &shared);
+      fit = FitCandidate(model, terms[0].candidate, terms[0].scope, train, &shared);
     } else {
       fit = FitTerms(model, terms, train, &full);
     }

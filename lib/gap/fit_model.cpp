@@ -118,12 +118,50 @@ GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
   return w;
 }
 
-int GapModel::NumGroups(const Term& t) const {
-  return t.per_scenario ? design_.num_scenarios() : 1;
+const char* ScopeName(Scope scope) {
+  switch (scope) {
+    case Scope::kPerLight: return "per_light";
+    case Scope::kPerScenario: return "per_scenario";
+    default: return "shared";
+  }
 }
 
+int ScopeGroups(const Design& d, Scope scope) {
+  switch (scope) {
+    case Scope::kPerLight: return d.num_lights();
+    case Scope::kPerScenario: return d.num_scenarios();
+    default: return 1;
+  }
+}
+
+int ScopeGroupOf(const Design& d, Scope scope, int scenario) {
+  switch (scope) {
+    case Scope::kPerLight: return d.scenario_light[scenario];
+    case Scope::kPerScenario: return scenario;
+    default: return 0;
+  }
+}
+
+std::string ScopeGroupName(const Design& d, Scope scope, int group) {
+  switch (scope) {
+    case Scope::kPerLight: return d.light_names[group];
+    case Scope::kPerScenario: return d.scenario_names[group];
+    default: return "all";
+  }
+}
+
+bool ScopeApplies(const Design& d, Scope scope) {
+  const int groups = ScopeGroups(d, scope);
+  if (scope == Scope::kPerLight)
+    return groups > 1 && groups < d.num_scenarios() &&
+           static_cast<int>(d.scenario_light.size()) == d.num_scenarios();
+  return groups > 1;
+}
+
+int GapModel::NumGroups(const Term& t) const { return ScopeGroups(design_, t.scope); }
+
 int GapModel::Group(const Term& t, int cell) const {
-  return t.per_scenario ? design_.scenario[cell] : 0;
+  return ScopeGroupOf(design_, t.scope, design_.scenario[cell]);
 }
 
 double GapModel::ToCoord(int candidate, int axis, double value) const {

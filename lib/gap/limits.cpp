@@ -105,7 +105,7 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
     lim.param = axis.param;
     lim.neutral = axis.neutral;
     lim.discrete = axis.discrete;
-    Term term{cand_index, false, {std::vector<int>(cand.axes.size(), -1)}};
+    Term term{cand_index, Scope::kShared, {std::vector<int>(cand.axes.size(), -1)}};
     double u[2] = {0, 0};
     const int held = cand.axes.size() > 1 ? 1 - on : -1;
     if (held >= 0) {

@@ -15,6 +15,8 @@ namespace depthbias::gap {
 Design Subset(const Design& d, const std::vector<char>& cells) {
   Design s;
   s.scenario_names = d.scenario_names;
+  s.light_names = d.light_names;
+  s.scenario_light = d.scenario_light;
   s.metrics = d.metrics;
   const int kk = d.num_metrics();
   for (int c = 0; c < d.num_cells(); ++c) {
@@ -89,7 +91,7 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
       // The held-out cells simulated with the fold's calibrated base, and with its selection.
       auto simulate = [&](const ModelFit& fit) {
         const std::vector<double> v = SimulateValues(
-            SelectedParams(sims, base, fit, d.num_scenarios()), sub, options);
+            SelectedParams(sims, base, fit, d), sub, options);
         std::vector<double> mu(obs, NAN);
         int i = 0;
         for (int c = 0; c < d.num_cells(); ++c) {

@@ -20,7 +20,14 @@ const Candidate& CandidateOf(const DiagnoseResult& r, const TermFit& t) {
   return r.candidates[t.term.candidate];
 }
 
-std::string Scope(const TermFit& t) { return t.term.per_scenario ? "per_scenario" : "shared"; }
+std::string ScopeOf(const TermFit& t) { return ScopeName(t.term.scope); }
+
+// "shared", "per light", "per scenario".
+std::string ScopeText(Scope scope) {
+  std::string s = ScopeName(scope);
+  std::replace(s.begin(), s.end(), '_', ' ');
+  return s;
+}
 
 void GapJsonStat(JsonWriter& w, const std::string& key, const DiagnoseResult& r,
                  const GapStat& g) {
@@ -32,7 +39,7 @@ void GapJsonStat(JsonWriter& w, const std::string& key, const DiagnoseResult& r,
   w.EndObject().EndObject();
 }
 
-// {param: value} or {scenario: {param: value}}; with ci, {param: [lo, hi]}.
+// {param: value} or {group: {param: value}} (a light or a scenario); with ci, {param: [lo, hi]}.
 void ParamsJson(JsonWriter& w, const std::string& key, const DiagnoseResult& r, const TermFit& t,
                 bool ci) {
   const Candidate& c = CandidateOf(r, t);
@@ -46,11 +53,11 @@ void ParamsJson(JsonWriter& w, const std::string& key, const DiagnoseResult& r, 
     }
   };
   w.BeginObject(key);
-  if (!t.term.per_scenario) {
+  if (t.term.scope == Scope::kShared) {
     one(0);
   } else {
     for (size_t g = 0; g < t.values.size(); ++g) {
-      w.BeginObject(r.design.scenario_names[g]);
+      w.BeginObject(ScopeGroupName(r.design, t.term.scope, static_cast<int>(g)));
       one(static_cast<int>(g));
       w.EndObject();
     }
@@ -214,10 +221,11 @@ std::string text::ParamsText(const DiagnoseResult& r, const TermFit& t, bool wit
     }
     return s;
   };
-  if (!t.term.per_scenario) return one(0);
+  if (t.term.scope == Scope::kShared) return one(0);
   std::string s;
   for (size_t g = 0; g < t.values.size(); ++g)
-    s += (s.empty() ? "" : "; ") + r.design.scenario_names[g] + ": " + one(static_cast<int>(g));
+    s += (s.empty() ? "" : "; ") + ScopeGroupName(r.design, t.term.scope, static_cast<int>(g)) +
+         ": " + one(static_cast<int>(g));
   return s;
 }
 
@@ -306,10 +314,11 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     const EffectResult& e = r.effects[i];
     const sim::EffectInfo* info = sim::FindEffect(e.name);
     w.BeginObject().String("name", e.name).Integer("rank", static_cast<long long>(i + 1));
-    w.String("scope", Scope(e.fit));
+    w.String("scope", ScopeOf(e.fit));
     ParamsJson(w, "params", r, e.fit, false);
     ParamsJson(w, "ci95", r, e.fit, true);
     w.Number("delta_bic", e.delta_bic).Number("delta_bic_shared", e.delta_bic_shared);
+    w.Number("delta_bic_per_light", e.delta_bic_per_light);
     w.Number("delta_bic_per_scenario", e.delta_bic_per_scenario);
     w.Number("heldout_gain", e.heldout_gain).Bool("earns", e.earns);
     w.Number("shrink_in_sample_pct", e.shrink_in_sample_pct);
@@ -324,13 +333,13 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   w.BeginArray("selected");
   for (size_t i = 0; i < r.selected.terms.size(); ++i) {
     const TermFit& t = r.selected.terms[i];
-    w.BeginObject().String("name", CandidateOf(r, t).effect).String("scope", Scope(t));
+    w.BeginObject().String("name", CandidateOf(r, t).effect).String("scope", ScopeOf(t));
     ParamsJson(w, "params", r, t, false);
     ParamsJson(w, "ci95", r, t, true);
     if (i < r.steps.size())
       w.Number("delta_bic", r.steps[i].delta_bic).Number("heldout_gain", r.steps[i].heldout_gain);
     if (i < r.size_spread.size()) {
-      // Shared: the spread itself; per scenario: one such object per scenario checked.
+      // Shared: the spread itself; per light or scenario: one such object per group checked.
       const std::vector<SizeSpread>& spread = r.size_spread[i];
       auto one = [&](const char* key, const SizeSpread& sp) {
         w.BeginObject(key).BeginArray("values");
@@ -339,13 +348,14 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
         w.BeginArray("ci95_fit").Number(sp.fit_lo).Number(sp.fit_hi).EndArray();
         w.Bool("widened", sp.widened).EndObject();
       };
-      if (!t.term.per_scenario) {
+      if (t.term.scope == Scope::kShared) {
         if (!spread.empty() && spread[0].checked) one("over_folds", spread[0]);
       } else if (std::any_of(spread.begin(), spread.end(),
                              [](const SizeSpread& g) { return g.checked; })) {
         w.BeginObject("over_folds");
         for (size_t g = 0; g < spread.size(); ++g)
-          if (spread[g].checked) one(r.design.scenario_names[g].c_str(), spread[g]);
+          if (spread[g].checked)
+            one(ScopeGroupName(r.design, t.term.scope, static_cast<int>(g)).c_str(), spread[g]);
         w.EndObject();
       }
     }
@@ -493,7 +503,8 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
       << " → " << Num(r.calibrated[s].sigma_d_px, 4) << " | "
       << Num(r.configured[s].invalid_prob) << " → " << Num(r.calibrated[s].invalid_prob)
       << " |\n";
-  o << "\nEvery candidate alone with it, parameters shared or per scenario (the better by BIC), "
+  o << "\nEvery candidate alone with it, parameters shared, per light or per scenario (the best "
+    << "by BIC, kept where it also beats the shared fit held out by one standard error), "
     << "ranked by held-out gain (the reference's held-out deviance minus the effect's; "
     << "ΔBIC = D(reference) − D(effect) − k·ln n). An effect earns its place with both above 0. "
     << "Shrink: of the baseline gap, in sample and on held-out cells.\n\n"
@@ -501,7 +512,7 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
        "sample | shrink held out | earns |\n|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < r.effects.size(); ++i) {
     const EffectResult& e = r.effects[i];
-    o << "| " << i + 1 << " | " << e.name << " | " << (e.per_scenario ? "per scenario" : "shared")
+    o << "| " << i + 1 << " | " << e.name << " | " << ScopeText(e.scope)
       << " | " << ParamsText(r, e.fit, true) << " | " << Num(e.delta_bic) << " | "
       << Num(e.heldout_gain) << " | " << Pct(e.shrink_in_sample_pct) << " | "
       << Pct(e.shrink_heldout_pct) << " | " << (e.earns ? "yes" : "no") << " |\n";
@@ -511,7 +522,7 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
   if (r.steps.empty()) o << "- nothing earns its place: no registered effect is named.\n";
   for (size_t i = 0; i < r.steps.size(); ++i)
     o << "- " << i + 1 << ". " << r.steps[i].effect << " ("
-      << (r.steps[i].per_scenario ? "per scenario" : "shared") << "): ΔBIC "
+      << ScopeText(r.steps[i].scope) << "): ΔBIC "
       << Num(r.steps[i].delta_bic) << ", held-out gain " << Num(r.steps[i].heldout_gain) << "\n";
   if (!r.selected.terms.empty()) {
     o << "\nSelected, fitted together:\n\n| effect | parameters [95 % interval] |\n|---|---|\n";

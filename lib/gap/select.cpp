@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -112,7 +113,7 @@ std::vector<double> Signature(const GapModel& m, int candidate, double* r2_sigma
   const Design& d = m.design();
   const Simulations& s = m.sims();
   const Candidate& cand = m.surface(candidate).candidate;
-  Term term{candidate, false, {std::vector<int>(cand.axes.size(), -1)}};
+  Term term{candidate, Scope::kShared, {std::vector<int>(cand.axes.size(), -1)}};
   double u[2] = {0, 0};
   for (size_t a = 0; a < cand.axes.size(); ++a) {
     if (cand.axes[a].discrete)
@@ -169,6 +170,25 @@ double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
 
 }  // namespace
 
+bool BeatsByOneSe(const GapModel& m, const HeldOut& wider, const HeldOut& simpler) {
+  std::map<long long, double> a, b;
+  m.DataDeviance(wider.mu, wider.cells, &a);
+  m.DataDeviance(simpler.mu, simpler.cells, &b);
+  for (const auto& kv : a) b.emplace(kv.first, 0.0);
+  std::vector<double> diff;  // wider − simpler, per unit
+  for (const auto& [unit, v] : b) {
+    const auto it = a.find(unit);
+    diff.push_back((it == a.end() ? 0.0 : it->second) - v);
+  }
+  const double n = static_cast<double>(diff.size());
+  if (n < 2) return false;
+  double mean = 0, ss = 0;
+  for (double d : diff) mean += d / n;
+  for (double d : diff) ss += (d - mean) * (d - mean);
+  const double se_sum = std::sqrt(n * ss / (n - 1));  // of Σ diff
+  return n * mean < -se_sum;
+}
+
 Selection Select(GapModel& model, const PlacementEstimate& placement,
                  const std::vector<char>& train, const std::vector<int>& fold, int num_folds,
                  const DiagnoseParams& params) {
@@ -208,19 +228,25 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
     model.SetAbsorbs(i, (r.r2_sigma[i] >= r2_limit ? 1 : 0) | (r.r2_p[i] >= r2_limit ? 2 : 0));
   }
 
-  // Every candidate alone, shared and per scenario. The fits read the model alone and run side
-  // by side (params.simulate.threads); their results are taken in the candidates' order.
+  // Every candidate alone, shared, per light and per scenario. The fits read the model alone and
+  // run side by side (params.simulate.threads); their results are taken in the candidates' order.
   const GapModel& fixed = model;
   const int threads = params.simulate.threads;
   auto dbic = [&](const ModelFit& f) {
     return f.success ? m0.Deviance() - f.Deviance() - (f.num_params - m0.num_params) * log_n
                      : -INFINITY;
   };
+  constexpr Scope kGrouped[] = {Scope::kPerLight, Scope::kPerScenario};
   struct Alone {
-    ModelFit shared, per;
-    bool per_scenario = false;
+    ModelFit shared;
+    ModelFit grouped[2];  // per light, per scenario (kGrouped's order); unfitted where they
+                          // do not apply
+    Scope scope = Scope::kShared;
     HeldOut ho;
     std::vector<double> mu;
+    const ModelFit& Kept() const {
+      return scope == Scope::kShared ? shared : grouped[scope == Scope::kPerLight ? 0 : 1];
+    }
   };
   std::vector<Alone> alone(n_cand);
   // shared_only: the shared fits alone, the widest model's start.
@@ -229,29 +255,32 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
       const int i = static_cast<int>(k);
       Alone& a = alone[k];
       a = Alone{};
-      a.shared = FitCandidate(fixed, i, false, train);
+      a.shared = FitCandidate(fixed, i, Scope::kShared, train);
       if (shared_only) return;
-      if (design.num_scenarios() > 1) a.per = FitCandidate(fixed, i, true, train, &a.shared);
-      if (!a.shared.success && !a.per.success) return;
-      // Per scenario only when it earns both ways: by BIC, and on the held-out cells against
-      // the shared fit (three scenarios' extra values can buy BIC from the simulation's own
-      // misfit of a large effect, and fit it differently in each scenario).
-      const double per_bic = a.per.success ? dbic(a.per) : -INFINITY;
-      a.per_scenario = !a.shared.success || per_bic > dbic(a.shared);
-      if (a.per_scenario) {
-        a.ho = CrossValidate(fixed, {a.per.terms[0].term}, fold, num_folds, a.per, train);
-        if (a.shared.success) {
-          HeldOut ho = CrossValidate(fixed, {a.shared.terms[0].term}, fold, num_folds, a.shared,
-                                     train);
-          if (ho.success && (!a.ho.success || ho.data_deviance <= a.ho.data_deviance)) {
-            a.per_scenario = false;
-            a.ho = std::move(ho);
-          }
+      for (int g = 0; g < 2; ++g)
+        if (ScopeApplies(design, kGrouped[g]))
+          a.grouped[g] = FitCandidate(fixed, i, kGrouped[g], train, &a.shared);
+      // A grouped scope only when it earns both ways: the best by BIC (the fewer groups win a
+      // tie), and on the held-out cells against the shared fit by more than one standard error
+      // (several groups' values can buy BIC from the simulation's own misfit of a large effect,
+      // or from the placement draws of each group's test points, and fit it differently in each).
+      double best_bic = a.shared.success ? dbic(a.shared) : -INFINITY;
+      for (int g = 0; g < 2; ++g)
+        if (a.grouped[g].success && dbic(a.grouped[g]) > best_bic) {
+          best_bic = dbic(a.grouped[g]);
+          a.scope = kGrouped[g];
         }
-      } else {
-        a.ho = CrossValidate(fixed, {a.shared.terms[0].term}, fold, num_folds, a.shared, train);
+      if (!a.shared.success && a.scope == Scope::kShared) return;
+      a.ho = CrossValidate(fixed, {a.Kept().terms[0].term}, fold, num_folds, a.Kept(), train);
+      if (a.scope != Scope::kShared && a.shared.success) {
+        HeldOut ho = CrossValidate(fixed, {a.shared.terms[0].term}, fold, num_folds, a.shared,
+                                   train);
+        if (ho.success && (!a.ho.success || !BeatsByOneSe(fixed, a.ho, ho))) {
+          a.scope = Scope::kShared;
+          a.ho = std::move(ho);
+        }
       }
-      if (a.ho.success) a.mu = fixed.Predict(a.per_scenario ? a.per : a.shared);
+      if (a.ho.success) a.mu = fixed.Predict(a.Kept());
     });
   };
   fit_alone(true);
@@ -271,7 +300,7 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
       const bool discrete = std::any_of(cand.axes.begin(), cand.axes.end(),
                                         [](const Axis& a) { return a.discrete; });
       if (model.Absorbs(i) || discrete) continue;
-      wide.push_back(Term{i, false, {std::vector<int>(cand.axes.size(), -1)}});
+      wide.push_back(Term{i, Scope::kShared, {std::vector<int>(cand.axes.size(), -1)}});
       if (alone[i].shared.success) start.terms.push_back(alone[i].shared.terms[0]);
     }
     const std::vector<double> phi_base = model.dispersion();
@@ -299,18 +328,17 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
   for (int i = 0; i < n_cand; ++i) {
     EffectResult e;
     e.name = sims.surfaces[i].candidate.effect;
-    const ModelFit& shared = alone[i].shared;
-    const ModelFit& per = alone[i].per;
-    e.delta_bic_shared = dbic(shared);
-    e.delta_bic_per_scenario = per.success ? dbic(per) : -INFINITY;
-    if (!shared.success && !per.success) {
-      r.message = e.name + ": " + shared.message;
+    const Alone& a = alone[i];
+    e.delta_bic_shared = dbic(a.shared);
+    e.delta_bic_per_light = dbic(a.grouped[0]);
+    e.delta_bic_per_scenario = dbic(a.grouped[1]);
+    if (!a.Kept().success) {
+      r.message = e.name + ": " + a.shared.message;
       return r;
     }
-    e.per_scenario = alone[i].per_scenario;
-    const ModelFit& f = e.per_scenario ? per : shared;
-    e.fit = f.terms[0];
-    e.delta_bic = e.per_scenario ? e.delta_bic_per_scenario : e.delta_bic_shared;
+    e.scope = a.scope;
+    e.fit = a.Kept().terms[0];
+    e.delta_bic = dbic(a.Kept());
     const HeldOut& ho = alone[i].ho;
     if (!ho.success) {
       r.message = e.name + ": " + ho.message;
@@ -407,7 +435,7 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
     terms.push_back(r.effects[best].fit.term);
     current = best_fit;
     current_ho = std::move(best_ho);
-    r.steps.push_back({r.effects[best].name, r.effects[best].per_scenario, best_dbic, best_gain});
+    r.steps.push_back({r.effects[best].name, r.effects[best].scope, best_dbic, best_gain});
   }
 
   auto keep_only = [&](const std::vector<char>& keep) {
@@ -530,7 +558,8 @@ std::string SizeText(const Candidate& c, const TermFit& t) {
 }
 
 std::vector<sim::SimParams> SelectedParams(const Simulations& sims, const sim::SimParams& base,
-                                           const ModelFit& fit, int num_scenarios) {
+                                           const ModelFit& fit, const Design& design) {
+  const int num_scenarios = design.num_scenarios();
   std::vector<sim::SimParams> per(num_scenarios, base);
   std::string why;
   for (int s = 0; s < num_scenarios; ++s) {
@@ -543,7 +572,7 @@ std::vector<sim::SimParams> SelectedParams(const Simulations& sims, const sim::S
     std::vector<sim::EffectSpec> specs;
     for (const TermFit& t : fit.terms)
       specs.push_back(SpecAt(sims.surfaces[t.term.candidate].candidate,
-                             t.values[t.term.per_scenario ? s : 0]));
+                             t.values[ScopeGroupOf(design, t.term.scope, s)]));
     if (!sim::BuildDepartures(specs, &per[s].departures, &why))
       throw std::invalid_argument("the selected effects: " + why);
   }

@@ -46,6 +46,13 @@ double Shrink(const GapStat& before, const GapStat& after);
 std::vector<double> Dispersion(const GapModel& model, const std::vector<double>& mu,
                                const std::vector<char>& cells);
 
+// Whether a fit with more parameters beats a simpler one held out by more than one standard
+// error of the difference of their held-out deviances, the test points being the independent
+// units it sums over (the one-standard-error rule: Hastie, Tibshirani and Friedman, The Elements
+// of Statistical Learning, 2nd ed., §7.10; within that, the simpler fit is kept). A gain that
+// one test point's placement draw makes does not count as the group's.
+bool BeatsByOneSe(const GapModel& model, const HeldOut& wider, const HeldOut& simpler);
+
 // Sets the model's dispersion (about the widest model: every candidate not absorbed by the
 // calibration and without a discrete axis, fitted together) and its calibration-absorbing
 // candidates; the model's design and simulations are the whole table's, `placement` the
@@ -67,11 +74,12 @@ bool KeepSteps(const GapModel& model, const ModelFit& m0, const std::vector<char
                std::vector<SelectionStep>* steps, ModelFit* current, HeldOut* current_ho,
                std::vector<int>* chosen = nullptr);
 
-// The size of a fitted term as text: "param value" (per scenario: "param v1 / v2 / …").
+// The size of a fitted term as text: "param value" (per light or scenario: "param v1 / v2 / …").
 std::string SizeText(const Candidate& candidate, const TermFit& term);
 
-// The selection's effects and calibration as the simulator takes them, one set per scenario.
+// The selection's effects and calibration as the simulator takes them, one set per scenario of
+// the design.
 std::vector<sim::SimParams> SelectedParams(const Simulations& sims, const sim::SimParams& base,
-                                           const ModelFit& fit, int num_scenarios);
+                                           const ModelFit& fit, const Design& design);
 
 }  // namespace depthbias::gap

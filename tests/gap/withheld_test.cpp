@@ -349,23 +349,24 @@ void ExpectIntervalOverFolds(const std::string& json, bool widened) {
   }
 }
 
-// The one selected effect fitted per scenario (one parameter): each scenario's 95 % interval
-// holds its fit's own and its fitted value ± t(3)·se of its refits without each of the four outer
-// folds, recomputed from the sizes gap.json lists; returns the intervals, in the scenarios' order.
-std::vector<std::vector<double>> ExpectScenarioIntervalsOverFolds(
-    const std::string& json, const std::vector<std::string>& scenarios) {
+// The one selected effect fitted per light or per scenario (`scope`, one parameter): each
+// group's 95 % interval holds its fit's own and its fitted value ± t(3)·se of its refits without
+// each of the four outer folds, recomputed from the sizes gap.json lists; returns the intervals,
+// in the groups' order.
+std::vector<std::vector<double>> ExpectGroupIntervalsOverFolds(
+    const std::string& json, const std::string& scope, const std::vector<std::string>& groups) {
   std::vector<std::vector<double>> out;
   const size_t sel = json.find("\"selected\": [");
   EXPECT_NE(sel, std::string::npos);
   if (sel == std::string::npos) return out;
-  EXPECT_NE(json.find("\"scope\": \"per_scenario\"", sel), std::string::npos);
+  EXPECT_NE(json.find("\"scope\": \"" + scope + "\"", sel), std::string::npos) << scope;
   const size_t params_at = json.find("\"params\"", sel);
   const size_t ci_at = json.find("\"ci95\"", sel);
   const size_t folds_at = json.find("\"over_folds\"", sel);
   EXPECT_NE(folds_at, std::string::npos) << "no spread over the folds";
   if (params_at == std::string::npos || ci_at == std::string::npos || folds_at == std::string::npos)
     return out;
-  for (const std::string& s : scenarios) {
+  for (const std::string& s : groups) {
     const std::string key = "\"" + s + "\"";
     const size_t xp = json.find(key, params_at), cp = json.find(key, ci_at),
                  fp = json.find(key, folds_at);
@@ -628,17 +629,27 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
       if (seed == 1 && (o.truth.name == "range_vs_depth large" ||
                         o.truth.name == "radial_disparity_residual small"))
         ExpectIntervalOverFolds(o.gap_json, o.truth.name == "range_vs_depth large");
-      // At seed 1 the offset is fitted per scenario: 0.403 and 0.402 px in daylight, 0.357 and
-      // 0.374 at sunset. The fits' own intervals ([0.383, 0.422] in daylight HA) missed 0.35 in
-      // three scenarios of four; each scenario's refits without each distance widen them, and
-      // every one holds it.
-      if (seed == 1 && o.truth.name == "disparity_offset large") {
-        const auto cis = ExpectScenarioIntervalsOverFolds(
-            o.gap_json, {"daylight/HA", "daylight/HD", "sunset/HA", "sunset/HD"});
-        EXPECT_EQ(cis.size(), 4u);
+      // The offset of 0.35 px. At seed 1 it is shared at 0.383 px (per scenario it read 0.403
+      // and 0.402 px in daylight, 0.357 and 0.374 at sunset, where its placement draws pull
+      // each group, and the set per scenario does not beat the shared fit held out by one
+      // standard error); the fit's own interval [0.372, 0.393] misses 0.35, its refits without
+      // each distance widen it to [0.336, 0.430]. At seed 3 it is fitted per light (0.417 px in
+      // daylight, 0.302 at sunset), and each light's refits widen its interval to hold 0.35.
+      if (o.truth.name == "disparity_offset large") {
+        std::vector<std::vector<double>> cis;
+        if (seed == 1) {
+          ExpectIntervalOverFolds(o.gap_json, true);
+          const size_t sel = o.gap_json.find("\"selected\": [");
+          cis.push_back(NumbersFrom(o.gap_json,
+                                    o.gap_json.find('[', o.gap_json.find("\"ci95\"", sel)), 2));
+        } else {
+          cis = ExpectGroupIntervalsOverFolds(o.gap_json, "per_light", {"daylight", "sunset"});
+          EXPECT_EQ(cis.size(), 2u);
+        }
         for (const auto& ci : cis) {
-          EXPECT_LE(ci[0], 0.35);
-          EXPECT_GE(ci[1], 0.35);
+          ASSERT_EQ(ci.size(), 2u);
+          EXPECT_LE(ci[0], 0.35) << seed;
+          EXPECT_GE(ci[1], 0.35) << seed;
         }
       }
       if (o.truth.name == "depth_scale large") {
