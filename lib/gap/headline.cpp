@@ -197,8 +197,7 @@ std::string Headline(const DiagnoseResult& r) {
       << Num(100 * pe.b[km], 2) << " % of distance (" << Num(law(4), 2) << " m at 4 m, "
       << Num(law(16), 2) << " m = " << Num(100 * law(16) / 16, 2) << " % at 16 m; REML over "
       << pe.points_used[km] << " test points)\n";
-    // The test points beyond it (unexplained.h: of a flagged pair of partners, the one that
-    // departs from its light and distance's other test points), farthest reading first.
+    // The test points beyond it (unexplained.h), farthest reading first.
     std::vector<const Unexplained*> beyond;
     for (const Unexplained& u : r.unexplained)
       if (u.metric == "median_bias_m" && u.beyond_placement_law) beyond.push_back(&u);
@@ -330,10 +329,8 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
     }
     o << "\nTest points beyond the law (p < " << Num(p.placement_alpha) << " / " << pe.num_points
       << ", left out of its estimate and given their own departure as scatter, so that they "
-      << "are never taken for a camera effect). The departure is about the fixed effects: with "
-      << "two lights a misplaced point's partner of the other light departs the other way, and "
-      << "the lines above name the one that departs from its light and distance's other test "
-      << "points:\n\n| test point | metric | departure | z |\n"
+      << "are never taken for a camera effect). The departure is read from the fixed effects "
+      << "fitted without the points flagged:\n\n| test point | metric | departure | z |\n"
       << "|---|---|---|---|\n";
     int rows = 0;
     for (int k = 0; k < kk; ++k)

@@ -44,17 +44,22 @@ std::vector<int> Levels(const Design& d, int factor, int* count) {
 }
 
 // Columns of the fixed effects for the listed cells: a common offset, the main effects and the
-// two-factor interactions of the five factors (indicator coding) but light × angle, reduced to
-// full rank. The registry's laws act through distance and angle jointly (range against depth,
-// a tilt, a radial residual, edge mixing) and per scenario (light × preset) with distance; none
-// makes the light change how the angle acts. A light × angle pattern is a session's placement:
-// the stand of one session set off at one angle.
+// two-factor interactions of the five factors (indicator coding) but light × angle, and distance
+// × angle as the two laws D·(1 − cos α) and D²·(1 − cos α) (FixedEffectsWith), reduced to full
+// rank. The
+// registry's laws act through distance and angle jointly (range against depth, a tilt, a radial
+// residual, edge mixing) and per scenario (light × preset) with distance; none makes the light
+// change how the angle acts. A light × angle pattern is a session's placement: the stand of one
+// session set off at one angle.
 //
 // Test points must keep degrees of freedom of their own, or the scatter cannot be estimated (its
-// REML runs off to any size). With one light (a user's unit: 16 test points of distance × angle),
-// distance × angle leaves none: it is then left out, and what of a camera law is not additive in
-// distance and angle (a disparity offset ∝ Z² = D²·cos²α: about a tenth of its size at 16 m
-// and 35°) is counted as scatter.
+// REML runs off to any size), nor a misplaced point be told from the law it inflates. The
+// distance × angle columns are kept where the test points keep at least half their number beyond
+// the fixed effects: 19 of 32 on the article's grid. With one light (a user's unit: 16 test
+// points of distance × angle) they would leave 7 and are left out (with them, a point set 2 m
+// far on such a unit inflates the law past flagging: Placement.AUnitOfOneLight…), and what of a
+// camera law is not additive in distance and angle (a disparity offset ∝ Z² = D²·cos²α: about a
+// tenth of its size at 16 m and 35°) is counted as scatter.
 // Degrees of freedom the test points of `cells` keep beyond x; *points: how many there are.
 int ScatterDof(const Eigen::MatrixXd& x, const Design& d, const std::vector<int>& cells,
                int* points) {
@@ -81,7 +86,7 @@ Eigen::MatrixXd FixedEffects(const Design& d, const std::vector<int>& cells) {
   Eigen::MatrixXd x = FixedEffectsWith(d, cells, true);
   if (cells.empty()) return x;
   int points = 0;
-  if (ScatterDof(x, d, cells, &points) < std::max(3, points / 4))
+  if (ScatterDof(x, d, cells, &points) < std::max(3, (points + 1) / 2))
     x = FixedEffectsWith(d, cells, false);
   return x;
 }
@@ -105,10 +110,32 @@ Eigen::MatrixXd FixedEffectsWith(const Design& d, const std::vector<int>& cells,
   for (int f = 0; f < 5; ++f)
     for (int g = f + 1; g < 5; ++g) {
       if (f == 0 && g == 2) continue;  // light × angle: no camera law of the registry has it
-      if (f == 1 && g == 2 && !distance_angle) continue;
+      if (f == 1 && g == 2) continue;  // distance × angle: its smooth part only, below
       for (const auto& a : main[f])
         for (const auto& b : main[g]) cols.push_back(a.cwiseProduct(b));
     }
+  // Distance × angle as two laws. A camera law acts through the panel's depth Z = D·cos α,
+  // linearly (a scale: D·cos α; a range read as depth: D·(1 − cos α)) or as its square (a
+  // disparity offset or drift: D²·cos²α; a radial residual: D²·sin²α, r ∝ tan α). Beside the
+  // main effects of distance and angle, what they leave is D·(1 − cos α) and D²·sin²α, and
+  // sin²α = (1 − cos α)(1 + cos α) is 1.82–1.99 times 1 − cos α from 10° to 35°: two columns,
+  // D·(1 − cos α) and D²·(1 − cos α). The full table of distance × angle (9 parameters on the
+  // article's grid) would also take up what one test point does alone, and with two lights
+  // leave a test point only its contrast with its partner of the other light (a misplaced
+  // point and its partner then depart together, the other way, and which of them was misplaced
+  // cannot be told); a slope a distance (3) leaves a 35° point, whose 1 − cos α sets the slope,
+  // much the same.
+  if (distance_angle) {
+    Eigen::VectorXd c1(n), c2(n);
+    for (int i = 0; i < n; ++i) {
+      const sim::Cell& cell = d.cells[cells[i]];
+      const double dist = cell.distance_m / 10.0;
+      c1(i) = dist * (1.0 - std::cos(cell.angle_deg * M_PI / 180.0));
+      c2(i) = dist * c1(i);
+    }
+    cols.push_back(c1);
+    cols.push_back(c2);
+  }
   Eigen::MatrixXd x(n, static_cast<int>(cols.size()));
   for (size_t j = 0; j < cols.size(); ++j) x.col(static_cast<int>(j)) = cols[j];
   if (n == 0) return x;
@@ -341,7 +368,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
     mean_d /= blocks;
     const double rms = std::sqrt(sum_sq / static_cast<double>(rows.size())) + 1e-12;
     double a = 0, b = 0;
-    for (int iter = 0; iter < 8; ++iter) {
+    for (int iter = 0; iter < 12; ++iter) {
       FitLaw(r, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3), &a, &b);
       Eigen::VectorXd beta;
       Eigen::MatrixXd c_inv;
@@ -377,12 +404,24 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
         pe.departure[k][t] = m;
         zs[j] = var > 1e-3 * own ? m / std::sqrt(var) : 0.0;
         pe.departure_z[k][t] = zs[j] / z_scale;
-        if (pass == 0) continue;
-        const bool beyond = std::fabs(pe.departure_z[k][t]) > z_crit;
-        if (beyond) changed = true;
-        flag[t] = beyond;
-        r.free_tau[j] = beyond ? 1e3 * rms : 0.0;
       }
+      }
+      // One point at a time, the farthest beyond, and the fit made again without it: a
+      // misplaced point pulls the effects it shares (its light and distance, its angle, the
+      // distance × angle laws), and its neighbours may depart beyond the law only while it is
+      // in.
+      int worst = -1;
+      for (int j = 0; j < blocks; ++j) {
+        const int t = block_point[j];
+        if (flag[t] || !(std::fabs(pe.departure_z[k][t]) > z_crit)) continue;
+        if (worst < 0 || std::fabs(pe.departure_z[k][t]) >
+                             std::fabs(pe.departure_z[k][block_point[worst]]))
+          worst = j;
+      }
+      if (worst >= 0) {
+        flag[block_point[worst]] = 1;
+        r.free_tau[worst] = 1e3 * rms;
+        changed = true;
       }
       // With few test points a misplaced one inflates the law and spills into the fixed effects
       // of its row and column (on a unit, a quarter of its departure each), so it may not stand
@@ -424,6 +463,27 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       pe.a[k] = a, pe.b[k] = b;
       pe.points_used[k] = used;
       if (!changed) break;
+    }
+    // The law and the fixed effects once more from the points not flagged, and every flagged
+    // point's departure read as predicted from them: a point flagged while it was still in the
+    // fit had part of its departure taken up by the effects it shares.
+    if (FlaggedBlocks(flag, block_point) > 0) {
+      FitLaw(r, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3), &a, &b);
+      Eigen::VectorXd beta;
+      Eigen::MatrixXd c_inv;
+      r.Objective(a, b, &beta, &c_inv);
+      pe.a[k] = a, pe.b[k] = b;
+      for (int j = 0; j < blocks; ++j) {
+        const int t = block_point[j];
+        if (!flag[t]) continue;
+        const double s = r.s[j];
+        const double m = (r.w[j] - r.v[j].dot(beta)) / s;
+        const double tau =
+            std::max(a * r.f0[j] + b * r.f1[j], pe.Floor(k, pe.point_distance_m[t]));
+        const double var = tau * tau + 1.0 / s + r.v[j].dot(c_inv * r.v[j]) / (s * s);
+        pe.departure[k][t] = m;
+        pe.departure_z[k][t] = var > 0 ? m / std::sqrt(var) : 0.0;
+      }
     }
     for (int t = 0; t < np; ++t) {
       const double law = pe.Law(k, metric, pe.point_distance_m[t]);

@@ -11,26 +11,32 @@
 // with σ_i the replicate noise (noise.h, known), X the fixed effects every camera law of the
 // registry lives in (main effects and two-factor interactions of light, distance, angle,
 // preset and emitter, but light × angle: no law of the registry makes the light change how the
-// angle acts, while one session's stand set off at one angle does), and τ the placement
-// scatter's law in the test point's distance D:
+// angle acts, while one session's stand set off at one angle does; and distance × angle as the
+// two laws D·(1 − cos α) and D²·(1 − cos α): how a law acting through the panel's depth D·cos α,
+// or its square, departs from additive in distance and angle), and τ the placement scatter's law
+// in the test point's distance D:
 //   median bias:  τ(D) = a + b·D  [m]   (a: tape and stand, independent of range; b·D: a
 //                 distance meaning or aiming error, and depth read through a panel set a
 //                 fraction of a degree off, which grow with range)
 //   other metrics: τ(D) = a · (D / 10 m)^e, e the metric's noise exponent (one parameter)
 // estimated by restricted maximum likelihood (REML: the fixed effects' degrees of freedom are
-// not taken for scatter). Only the three-factor part of light × distance × angle that no
-// two-factor law explains is counted as placement, so a camera law of the registry stays a
-// fixed effect and is judged against τ, not absorbed by it.
+// not taken for scatter). What of light × distance × angle no two-factor law explains is counted
+// as placement, so a camera law of the registry stays a fixed effect and is judged against τ,
+// not absorbed by it.
 //
 // Heavy tail: a test point's departure (its recordings' mean residual about X·β) is read
 // against the law, and against the departures' own robust scale where a tail has inflated the
-// law (1.4826·median |z| < 1). A point beyond p < alpha / test points (Bonferroni) is flagged,
-// given a free variance in the estimate (its mean informs neither β nor the law; its preset and
-// emitter contrasts still do), and the search grows until no point joins; a flagged point gets
-// its own departure as its scatter, so that one misplaced panel is reported as such and never
-// taken for a camera effect. With two lights, light × distance and distance × angle in X leave
-// a test point only its contrast with the other light's: a misplaced point and its partner
-// depart together, and a departure is found from several times the law.
+// law (1.4826·median |z| < 1). The point farthest beyond p < alpha / test points (Bonferroni) is
+// flagged and given a free variance in the estimate (its mean informs neither β nor the law; its
+// preset and emitter contrasts still do), the fit is made again, and the search grows one point
+// at a time until no point joins: a misplaced point pulls its distance's effects, and its
+// neighbours may look beyond the law only while it is in. A flagged point's departure is then
+// read as predicted from the others, and it gets that departure as its scatter, so that one
+// misplaced panel is reported as such and never taken for a camera effect. Distance × angle is
+// two laws, not a table of its own: a table would also take up what one test point does alone,
+// and with two lights leave a point only its contrast with its partner of the other light (a
+// misplaced point and its partner would depart together, the other way, and which of them was
+// misplaced could not be told).
 
 #include <string>
 #include <vector>

@@ -157,16 +157,6 @@ Unexplained Describe(const GapModel& m, const std::vector<double>& mu,
   return u;
 }
 
-// The test point of the other light at the same distance and angle, or −1.
-int Partner(const PlacementEstimate& pe, int t) {
-  for (int q = 0; q < pe.num_points; ++q)
-    if (q != t && pe.point_light[q] != pe.point_light[t] &&
-        pe.point_distance_m[q] == pe.point_distance_m[t] &&
-        pe.point_angle_deg[q] == pe.point_angle_deg[t])
-      return q;
-  return -1;
-}
-
 // Test points of t's light and distance (t included).
 int RowSize(const PlacementEstimate& pe, int t) {
   int n = 0;
@@ -416,15 +406,6 @@ std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<doubl
     const std::vector<double> own = OwnDepartures(m, mu, pe, k);
     for (int t = 0; t < pe.num_points; ++t) {
       if (!pe.flagged[k][t] || !std::isfinite(own[t])) continue;
-      // With two lights the estimate sees a test point only against its partner of the other
-      // light (light × distance and distance × angle are fixed effects): a misplaced point and
-      // its partner are flagged together, the other way. The one whose recordings depart from
-      // the other test points of its light and distance is the misplaced one.
-      const int partner = Partner(pe, t);
-      if (partner >= 0 && pe.flagged[k][partner] &&
-          pe.departure[k][t] * pe.departure[k][partner] < 0 && std::isfinite(own[partner]) &&
-          std::fabs(own[t]) < std::fabs(own[partner]))
-        continue;
       const std::string where = PointName(pe, t);
       bool listed = false;
       for (const Unexplained& u : out)

@@ -36,9 +36,8 @@ struct RestParams {
 // wholes (a placement is as likely short as long), the best of those laws against the best of
 // the drawn tables', and described as "every recording" or "distance ≥ X m".
 // Test points the placement estimate flags in the median bias (a panel set off by more than its
-// law allows) are listed too, as one test point each; of a flagged pair of partners of the two
-// lights, the one that departs from the other test points of its light and distance. Sorted by
-// χ², largest first.
+// law allows) are listed too, as one test point each, sized from the other test points of its
+// light and distance. Sorted by χ², largest first.
 std::vector<Unexplained> DescribeRest(const GapModel& model, const std::vector<double>& mu,
                                       const PlacementEstimate& placement,
                                       const RestParams& params);

@@ -482,7 +482,10 @@ std::string NestedFolds(const std::string& json) {
 // earns its parameter: it is named "one of" with the drift and nothing is selected, by the
 // whole table and by every outer fold, which runs the same rule on its training cells (run
 // after the folds on the whole table alone, it left three folds keeping the offset, and the
-// nested figures measured a procedure that was not the one reported).
+// nested figures measured a procedure that was not the one reported). Of the effects along the
+// calibration beside which the offset no longer earns, the best by BIC is named: the drift (BIC
+// 743 without the offset), not the noise gain that comes first in the registry and moves no
+// median, which the rule named while it took the first.
 TEST(Cases, AnOffsetADriftExplainsIsNamedWithIt) {
   const std::vector<CaseOutcome> out = OneCase("temporal_drift large", 1);
   ASSERT_EQ(out.size(), 1u);
@@ -599,8 +602,10 @@ TEST(Article, ARangeLawIsJudgedInTheMetricsItMoves) {
 // table keeps it, its interval holds the injected size; at seed 3 it passes.
 // The whole suite and the other fifteen null tables take about 5 minutes a seed:
 // scripts/gap_cases.sh. The selected effect's interval is checked against its refits without
-// each distance on two of them: range_vs_depth large, whose refits widen it, and
-// radial_disparity_residual small, whose refits agree within the fit's own interval.
+// each distance on three of them at seed 1: range_vs_depth large and radial_disparity_residual
+// small, whose refits widen it, and depth_scale large, whose refits agree within the fit's own
+// interval ([0.051, 0.065] around 0.058; the radial residual's refits agreed within its own
+// while distance × angle was a table of its own in the placement's fixed effects).
 TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
   const sim::SimParams base = Base();
   DiagnoseParams params;
@@ -628,13 +633,13 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
     for (const CaseOutcome& o : RunWithheldCases(at, cases, params, seed + 999, only)) {
       if (seed == 1 && (o.truth.name == "range_vs_depth large" ||
                         o.truth.name == "radial_disparity_residual small"))
-        ExpectIntervalOverFolds(o.gap_json, o.truth.name == "range_vs_depth large");
-      // The offset of 0.35 px. At seed 1 it is shared at 0.383 px (per scenario it read 0.403
-      // and 0.402 px in daylight, 0.357 and 0.374 at sunset, where its placement draws pull
-      // each group, and the set per scenario does not beat the shared fit held out by one
-      // standard error); the fit's own interval [0.372, 0.393] misses 0.35, its refits without
-      // each distance widen it to [0.336, 0.430]. At seed 3 it is fitted per light (0.417 px in
-      // daylight, 0.302 at sunset), and each light's refits widen its interval to hold 0.35.
+        ExpectIntervalOverFolds(o.gap_json, true);
+      // The offset of 0.35 px. At seed 1 it is shared at 0.347 px (0.383 while distance ×
+      // angle was a table of its own in the placement's fixed effects, its own interval
+      // [0.372, 0.393] missing 0.35); its refits without each distance widen [0.337, 0.357] to
+      // [0.313, 0.380]. At seed 3 it is fitted per light (0.411 px in daylight, 0.318 at
+      // sunset: each light's placement draws), and each light's refits widen its interval to
+      // hold 0.35.
       if (o.truth.name == "disparity_offset large") {
         std::vector<std::vector<double>> cis;
         if (seed == 1) {
@@ -663,6 +668,7 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
         if (seed == 3) {
           EXPECT_TRUE(o.pass) << o.why;
         }
+        if (seed == 1 && !o.selected.empty()) ExpectIntervalOverFolds(o.gap_json, false);
         const std::string folds = NestedFolds(o.gap_json);
         ASSERT_FALSE(folds.empty());
         int named = 0;
