@@ -480,9 +480,14 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
   if (!r.steps.empty()) {
     const double log_n_sel = std::log(static_cast<double>(std::max(current.num_obs, 2)));
     auto bic = [&](const ModelFit& f) { return f.Deviance() + f.num_params * log_n_sel; };
+    // Of several such effects, the one whose model without the kept effect is the best by BIC
+    // is named (the registry's order named the first: a drift's offset was named with the
+    // noise gain, which moves no median).
     std::vector<char> keep(r.steps.size(), 1);
-    for (size_t i = 0; i < r.steps.size(); ++i)
-      for (int e = 0; e < n_cand && keep[i]; ++e) {
+    for (size_t i = 0; i < r.steps.size(); ++i) {
+      int named = -1;
+      double named_with = INFINITY, named_without = INFINITY;
+      for (int e = 0; e < n_cand; ++e) {
         if (!r.effects[e].earns || !model.Absorbs(e)) continue;
         std::vector<Term> with_terms;
         ModelFit start = m0;
@@ -498,16 +503,20 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
         start.terms.push_back(current.terms[i]);
         const ModelFit with = FitTerms(model, with_terms, train, &start);
         if (!without.success || !with.success || bic(with) < bic(without)) continue;
-        keep[i] = 0;
-        const int ci = r.chosen[i];
-        r.ambiguous.push_back({{r.steps[i].effect, r.effects[e].name},
-                               {SizeText(sims.surfaces[ci].candidate, current.terms[i]),
-                                SizeText(sims.surfaces[e].candidate, r.effects[e].fit)},
-                               NAN});
-        r.dropped.push_back(r.steps[i].effect + " (beside " + r.effects[e].name +
-                            ", along the calibration, it no longer earns its parameters: BIC " +
-                            Num(bic(with)) + " with it, " + Num(bic(without)) + " without)");
+        if (bic(without) < named_without)
+          named = e, named_with = bic(with), named_without = bic(without);
       }
+      if (named < 0) continue;
+      keep[i] = 0;
+      const int ci = r.chosen[i];
+      r.ambiguous.push_back({{r.steps[i].effect, r.effects[named].name},
+                             {SizeText(sims.surfaces[ci].candidate, current.terms[i]),
+                              SizeText(sims.surfaces[named].candidate, r.effects[named].fit)},
+                             NAN});
+      r.dropped.push_back(r.steps[i].effect + " (beside " + r.effects[named].name +
+                          ", along the calibration, it no longer earns its parameters: BIC " +
+                          Num(named_with) + " with it, " + Num(named_without) + " without)");
+    }
     keep_only(keep);
   }
   r.m0 = std::move(m0);
