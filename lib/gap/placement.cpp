@@ -46,11 +46,10 @@ std::vector<int> Levels(const Design& d, int factor, int* count) {
 // Columns of the fixed effects for the listed cells: a common offset, the main effects and the
 // two-factor interactions of the five factors (indicator coding) but light × angle, and distance
 // × angle as the two laws D·(1 − cos α) and D²·(1 − cos α) (FixedEffectsWith), reduced to full
-// rank. The
-// registry's laws act through distance and angle jointly (range against depth, a tilt, a radial
-// residual, edge mixing) and per scenario (light × preset) with distance; none makes the light
-// change how the angle acts. A light × angle pattern is a session's placement: the stand of one
-// session set off at one angle.
+// rank. The registry's laws act through distance and angle jointly (range against depth, a
+// tilt, a radial residual, edge mixing) and per scenario (light × preset) with distance; none
+// makes the light change how the angle acts. A light × angle pattern is a session's placement:
+// the stand of one session set off at one angle.
 //
 // Test points must keep degrees of freedom of their own, or the scatter cannot be estimated (its
 // REML runs off to any size), nor a misplaced point be told from the law it inflates. The
