@@ -164,6 +164,20 @@ struct Reml {
     return free_tau[t] > 0 ? free_tau[t] : a * f0[t] + b * f1[t];
   }
 
+  // Block j's departure, its recordings' mean residual about X·β, and its variance under the
+  // law (a, b) with the scatter at least `floor`: Var = τ² + 1/S_j ∓ the fixed effects' share
+  // (− for a point informing β, + for one predicted from the others); own = τ² + 1/S_j.
+  double Departure(int j, double a, double b, double floor, const Eigen::VectorXd& beta,
+                   const Eigen::MatrixXd& c_inv, bool predicted, double* var,
+                   double* own) const {
+    const double sj = s[j];
+    const double tau = std::max(a * f0[j] + b * f1[j], floor);
+    const double lev = v[j].dot(c_inv * v[j]) / (sj * sj);
+    *own = tau * tau + 1.0 / sj;
+    *var = *own + (predicted ? lev : -lev);
+    return (w[j] - v[j].dot(beta)) / sj;
+  }
+
   // −2 × restricted log-likelihood (constants dropped); beta and c_inv on request.
   double Objective(double a, double b, Eigen::VectorXd* beta = nullptr,
                    Eigen::MatrixXd* c_inv = nullptr) const {
@@ -392,14 +406,9 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       for (int j = 0; j < blocks; ++j) {
         const int t = block_point[j];
         if (flag[t]) continue;  // a flag stays: the search only grows (it cannot oscillate)
-        const double s = r.s[j];
-        const double m = (r.w[j] - r.v[j].dot(beta)) / s;  // mean residual about X·β
-        const double tau = std::max(a * r.f0[j] + b * r.f1[j], pe.Floor(k, pe.point_distance_m[t]));
-        // Var(m_t) = τ² + 1/S_t ∓ the fixed effects' share (− for a point informing β, + for a
-        // flagged one, predicted from the others).
-        const double lev = r.v[j].dot(c_inv * r.v[j]) / (s * s);
-        const double own = tau * tau + 1.0 / s;
-        const double var = own + (flag[t] ? lev : -lev);
+        double var = 0, own = 0;
+        const double m = r.Departure(j, a, b, pe.Floor(k, pe.point_distance_m[t]), beta, c_inv,
+                                     false, &var, &own);
         pe.departure[k][t] = m;
         zs[j] = var > 1e-3 * own ? m / std::sqrt(var) : 0.0;
         pe.departure_z[k][t] = zs[j] / z_scale;
@@ -439,12 +448,10 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
           Eigen::VectorXd tbeta;
           Eigen::MatrixXd tc_inv;
           r.Objective(ta, tb, &tbeta, &tc_inv);
-          const double s = r.s[top];
-          const double m = (r.w[top] - r.v[top].dot(tbeta)) / s;
-          const double tau = std::max(ta * r.f0[top] + tb * r.f1[top],
-                                      pe.Floor(k, pe.point_distance_m[block_point[top]]));
-          const double var =
-              tau * tau + 1.0 / s + r.v[top].dot(tc_inv * r.v[top]) / (s * s);
+          double var = 0, own = 0;
+          const double m =
+              r.Departure(top, ta, tb, pe.Floor(k, pe.point_distance_m[block_point[top]]), tbeta,
+                          tc_inv, true, &var, &own);
           // The law is refitted from the other points: their degrees of freedom less the
           // law's own parameters make the statistic Student's t, not normal.
           int points = 0;
@@ -475,11 +482,9 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       for (int j = 0; j < blocks; ++j) {
         const int t = block_point[j];
         if (!flag[t]) continue;
-        const double s = r.s[j];
-        const double m = (r.w[j] - r.v[j].dot(beta)) / s;
-        const double tau =
-            std::max(a * r.f0[j] + b * r.f1[j], pe.Floor(k, pe.point_distance_m[t]));
-        const double var = tau * tau + 1.0 / s + r.v[j].dot(c_inv * r.v[j]) / (s * s);
+        double var = 0, own = 0;
+        const double m = r.Departure(j, a, b, pe.Floor(k, pe.point_distance_m[t]), beta, c_inv,
+                                     true, &var, &own);
         pe.departure[k][t] = m;
         pe.departure_z[k][t] = var > 0 ? m / std::sqrt(var) : 0.0;
       }
