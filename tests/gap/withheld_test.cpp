@@ -606,6 +606,9 @@ TEST(Article, ARangeLawIsJudgedInTheMetricsItMoves) {
 // small, whose refits widen it, and depth_scale large, whose refits agree within the fit's own
 // interval ([0.051, 0.065] around 0.058; the radial residual's refits agreed within its own
 // while distance × angle was a table of its own in the placement's fixed effects).
+// The radial residual of 0.8 px, at both seeds, is shared and its interval holds 0.8: with no
+// grid node between 0.6 and 1.5 px it was fitted per light, 0.67 px at sunset at seed 1 with
+// [0.573, 0.771].
 TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
   const sim::SimParams base = Base();
   DiagnoseParams params;
@@ -630,6 +633,7 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
     at.seed = seed;
     std::vector<int> only = indices(guarded);
     only.push_back(indices({"depth_scale large"}).front());
+    only.push_back(indices({"radial_disparity_residual large"}).front());
     for (const CaseOutcome& o : RunWithheldCases(at, cases, params, seed + 999, only)) {
       if (seed == 1 && (o.truth.name == "range_vs_depth large" ||
                         o.truth.name == "radial_disparity_residual small"))
@@ -656,6 +660,21 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
           EXPECT_LE(ci[0], 0.35) << seed;
           EXPECT_GE(ci[1], 0.35) << seed;
         }
+      }
+      if (o.truth.name == "radial_disparity_residual large") {
+        EXPECT_TRUE(o.pass) << "seed " << seed << ": " << o.why;
+        const size_t sel = o.gap_json.find("\"selected\": [");
+        ASSERT_NE(sel, std::string::npos);
+        const size_t scope = o.gap_json.find("\"scope\": \"", sel);
+        ASSERT_NE(scope, std::string::npos);
+        EXPECT_EQ(o.gap_json.compare(scope, 17, "\"scope\": \"shared\""), 0)
+            << "seed " << seed << ": " << o.gap_json.substr(scope, 40);
+        const std::vector<double> ci =
+            NumbersFrom(o.gap_json, o.gap_json.find('[', o.gap_json.find("\"ci95\"", sel)), 2);
+        ASSERT_EQ(ci.size(), 2u);
+        EXPECT_LE(ci[0], 0.8) << seed;
+        EXPECT_GE(ci[1], 0.8) << seed;
+        continue;
       }
       if (o.truth.name == "depth_scale large") {
         // Most outer folds, each blind to one distance, name the scale; nothing else is kept,
