@@ -29,11 +29,13 @@ std::vector<Candidate> MakeCandidates() {
                            0, 0.02)}});
   c.push_back({"range_vs_depth", {Continuous("weight", {0, 0.15, 0.4, 0.7, 1.0}, 0, 0.5)}});
   for (Candidate& law : c) law.range_law = true;  // the three above
-  // Nodes at ±1 px: between 0.6 and 1.5 px the interpolation crossed a change of regime. At
-  // 1.5 px the simulated sunset HA panel at 16 m and 35° is no longer the one found at 1 px
-  // (valid share 3.7 → 6.5 %, plane_std 0.098 → 0.190 m, where every other sunset cell's
-  // median reads as daylight's), and a residual of 0.8 px was fitted 0.67–0.68 px at sunset,
-  // its interval missing 0.8; with the nodes it is fitted shared at 0.79–0.80 px.
+  // Nodes at ±1 px: between 0.6 and 1.5 px the interpolation crossed a change of regime. The
+  // residual brings the measured plane nearer off axis and tilts it; the panel's size laid on
+  // it then takes in more than the panel (its panel share at 16 m, 35°, HA: 0.90 at 1 px, 0.80
+  // at sunset at 1.5 px). At sunset HA, where the panel gives 4 % valid samples, what is behind
+  // it then weighs (valid share 3.7 → 6.5 %, plane_std 0.098 → 0.190 m, where every other
+  // sunset cell's median reads as daylight's). A residual of 0.8 px was fitted 0.67–0.68 px at
+  // sunset, its interval missing 0.8; with the nodes it is fitted shared at 0.79–0.80 px.
   c.push_back({"radial_disparity_residual",
                {Continuous("k_px", {-1.5, -1, -0.6, -0.25, -0.08, 0, 0.08, 0.25, 0.6, 1, 1.5}, 0,
                            0.3)}});
