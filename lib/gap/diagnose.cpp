@@ -250,41 +250,70 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
     r.nested = RunNested(design, sims, base, params, fold, r.folds, model);
     if (r.nested.run && !r.steps.empty()) {
       std::vector<char> keep(r.steps.size(), 0);
+      const double sel_need[2] = {params.min_effect_shrink_pct, params.min_moved_shrink_pct};
+      const double own_need[2] = {params.min_own_shrink_pct, params.min_own_moved_shrink_pct};
+      // Each effect's own part first: in each outer fold, the share of that fold's calibrated
+      // gap it brings back when left out of the fold's selection (0 where the fold does not
+      // select it), averaged over the folds, read both ways. Each held-out distance is one
+      // piece of evidence: pooled, the fold of the largest gap would decide alone (a camera
+      // whose emitter adds no texture holds 90 % of a user's unit's gap in valid_pct at 4 m,
+      // where an offset of −0.25 px, 50–65 % of each other fold's gap, came to 6 % of the
+      // pooled one).
+      struct Own {
+        int count = 0;
+        double pct[2] = {NAN, NAN};
+        bool known = true;
+        bool earns = false;  // selected in half the folds or more, and its own part is enough
+      };
+      std::vector<Own> own(r.steps.size());
+      std::vector<std::string> own_earners;
+      for (size_t i = 0; i < r.steps.size(); ++i) {
+        Own& w = own[i];
+        double sum[2] = {0, 0};
+        int folds = 0;
+        for (const auto& f : r.nested.folds) {
+          const auto at = std::find(f.selected.begin(), f.selected.end(), r.steps[i].effect);
+          ++folds;
+          if (at == f.selected.end()) continue;
+          ++w.count;
+          const size_t j = static_cast<size_t>(at - f.selected.begin());
+          if (!f.simulated || !(f.simulated_calibrated_sq > 0) ||
+              j >= f.effect_gain_simulated.size() || j >= f.effect_share_moved.size()) {
+            w.known = false;
+            continue;
+          }
+          sum[0] += f.effect_gain_simulated[j] / f.simulated_calibrated_sq;
+          // NaN: its change moved nothing there.
+          if (std::isfinite(f.effect_share_moved[j])) sum[1] += f.effect_share_moved[j];
+        }
+        bool enough = false;
+        for (int m = 0; m < 2; ++m) {
+          if (w.known && folds > 0) w.pct[m] = 100 * sum[m] / folds;
+          enough |= !w.known || w.count == 0 || w.pct[m] >= own_need[m];
+        }
+        w.earns = enough && 2 * w.count >= static_cast<int>(r.nested.folds.size());
+        if (w.earns) own_earners.push_back(r.steps[i].effect);
+      }
+      // Then the effects that earn their own part, together: the folds' selections restricted
+      // to them, simulated again on the held-out cells. An effect a fold selected that the
+      // table does not keep (it loses held out, or too few folds select it) no longer decides
+      // for the others: on the article's table with a disparity offset of −0.98 px injected,
+      // three folds of four selected the offset (its own part 20 % of their gap), and the fold
+      // holding 12 m out an edge mixing that lost 326 of its 769 simulated Σz²: the folds'
+      // selections removed 9.2 % of the calibrated gap and the offset was dropped.
+      if (!own_earners.empty())
+        RestrictNested(design, sims, base, params, fold, model, own_earners, &r.nested);
+      const bool restricted = !r.nested.kept.empty();
+      const double joint_gain = restricted ? r.nested.gain_simulated_kept : r.nested.gain_simulated;
+      const GapStat& joint = restricted ? r.nested.simulated_kept : r.nested.simulated;
       // The selection's part, pooled over the folds: of the whole calibrated gap [0], and of
       // its part in the metrics the selections move [1] (MovedShare).
       const double calibrated = r.nested.simulated_calibrated.overall;
       const double sel_pct[2] = {
-          calibrated > 0 ? 100 * (calibrated - r.nested.simulated.overall) / calibrated : NAN,
-          100 * r.nested.share_moved};
-      const double sel_need[2] = {params.min_effect_shrink_pct, params.min_moved_shrink_pct};
-      const double own_need[2] = {params.min_own_shrink_pct, params.min_own_moved_shrink_pct};
+          calibrated > 0 ? 100 * (calibrated - joint.overall) / calibrated : NAN,
+          100 * (restricted ? r.nested.share_moved_kept : r.nested.share_moved)};
       for (size_t i = 0; i < r.steps.size(); ++i) {
-        int count = 0;
-        // Its own simulated part: in each outer fold, the share of that fold's calibrated gap
-        // it brings back when left out of the fold's selection (0 where the fold does not
-        // select it), averaged over the folds, read both ways. Each held-out distance is one
-        // piece of evidence: pooled, the fold of the largest gap would decide alone (a camera
-        // whose emitter adds no texture holds 90 % of a user's unit's gap in valid_pct at 4 m,
-        // where an offset of −0.25 px, 50–65 % of each other fold's gap, came to 6 % of the
-        // pooled one).
-        double own_sum[2] = {0, 0};
-        int own_folds = 0;
-        bool own_known = true;
-        for (const auto& f : r.nested.folds) {
-          const auto at = std::find(f.selected.begin(), f.selected.end(), r.steps[i].effect);
-          ++own_folds;
-          if (at == f.selected.end()) continue;
-          ++count;
-          const size_t j = static_cast<size_t>(at - f.selected.begin());
-          if (!f.simulated || !(f.simulated_calibrated_sq > 0) ||
-              j >= f.effect_gain_simulated.size() || j >= f.effect_share_moved.size()) {
-            own_known = false;
-            continue;
-          }
-          own_sum[0] += f.effect_gain_simulated[j] / f.simulated_calibrated_sq;
-          // NaN: its change moved nothing there.
-          if (std::isfinite(f.effect_share_moved[j])) own_sum[1] += f.effect_share_moved[j];
-        }
+        const Own& w = own[i];
         // The guards read shares of the calibrated base's held-out Σz², noise included, not of
         // its excess over the noise (Shrink): on a table without effect the excess is small,
         // and a tenth of it is earned by chance (3 of 20 null tables at seed 1 kept an offset
@@ -294,14 +323,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         // law is judged against gaps it cannot touch: on the article's table the held-out gap
         // sits in the emitter's valid_pct and the 4 m plane_std, and a depth scale of +12 %
         // (1.8 m at 16 m) would not remove a tenth of it.
-        double own_pct[2] = {NAN, NAN};
         bool by[2] = {false, false};
         const bool simulated = !std::isnan(r.nested.gain_simulated);
-        for (int m = 0; m < 2; ++m) {
-          if (own_known && own_folds > 0) own_pct[m] = 100 * own_sum[m] / own_folds;
+        for (int m = 0; m < 2; ++m)
           by[m] = sel_pct[m] >= sel_need[m] &&
-                  (!own_known || count == 0 || own_pct[m] >= own_need[m]);
-        }
+                  (!w.known || w.count == 0 || w.pct[m] >= own_need[m]);
         // The folds' selections must earn on their held-out cells as the simulator reproduces
         // them; as the fits predict them only where the folds were not simulated. The fits'
         // prediction interpolates the candidates' surfaces, and where the two disagree the
@@ -311,28 +337,28 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         // node at −0.12 loses the sunset HA panel (its tilt 67°), spread by the average over
         // placement (smooth.h) over the line.
         const bool held_out_earns =
-            simulated ? r.nested.gain_simulated > 0 && (by[0] || by[1]) : r.nested.gain > 0;
-        const bool earns =
-            held_out_earns && 2 * count >= static_cast<int>(r.nested.folds.size());
+            simulated ? joint_gain > 0 && (by[0] || by[1]) : r.nested.gain > 0;
+        const bool earns = held_out_earns && w.earns;
         if (earns) {
           keep[i] = 1;
           continue;
         }
         auto need = [&](double v) { return " (" + Num(v) + " % needed)"; };
         r.dropped.push_back(
-            r.steps[i].effect + " (selected in " + std::to_string(count) + " of " +
-            std::to_string(r.nested.folds.size()) + " outer folds; the folds' selections gain " +
+            r.steps[i].effect + " (selected in " + std::to_string(w.count) + " of " +
+            std::to_string(r.nested.folds.size()) + " outer folds; the folds' selections" +
+            (restricted ? " restricted to the effects earning their own part" : "") + " gain " +
             Num(r.nested.gain) + " held out" +
-            (simulated ? ", " + Num(r.nested.gain_simulated) + " simulated, removing " +
+            (simulated ? ", " + Num(joint_gain) + " simulated, removing " +
                              Num(sel_pct[0]) + " % of the calibrated base's gap" +
                              need(sel_need[0]) + " and " + Num(sel_pct[1]) +
                              " % of its part in the metrics they move" + need(sel_need[1])
                        : std::string()) +
-            (std::isnan(own_pct[0])
+            (std::isnan(w.pct[0])
                  ? std::string()
                  : "; left out of them, an outer fold's calibrated gap comes back by " +
-                       Num(own_pct[0]) + " % on average" + need(own_need[0]) +
-                       ", its part in the metrics it moves by " + Num(own_pct[1]) + " %" +
+                       Num(w.pct[0]) + " % on average" + need(own_need[0]) +
+                       ", its part in the metrics it moves by " + Num(w.pct[1]) + " %" +
                        need(own_need[1])) +
             ")");
       }

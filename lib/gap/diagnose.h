@@ -143,6 +143,7 @@ struct SelectionStep {
 // One outer fold of the nested cross-validation: everything fitted without its cells.
 struct NestedFold {
   std::string held;                    // e.g. "distance 16 m"
+  int index = -1;                      // its number in the cells' fold assignment
   int cells = 0;
   std::vector<std::string> selected;   // the fold's own selection
   double deviance_calibrated = 0;      // on its held-out cells, about the fold's calibrated base
@@ -157,6 +158,11 @@ struct NestedFold {
   // The same gain as a share of the calibrated Σz² in the metrics the effect moves
   // (MovedShare), per selected effect.
   std::vector<double> effect_share_moved;
+  // What simulating a part of the selection again needs (RestrictNested): the selection's fit
+  // (its terms in `selected`'s order) and, per observation of the design, the fold's y and unit
+  // of z (NaN where not held out or not valid).
+  ModelFit fit;
+  std::vector<double> y, unit;
 };
 
 // A selected term's size without each fold's cells: the selection refitted on the other cells
@@ -198,6 +204,11 @@ struct Nested {
   // gain_simulated as a share of the calibrated Σz² in the metrics the selections move, over
   // every fold's held-out cells (MovedShare; NaN when not simulated).
   double share_moved = NAN;
+  // The same three with each fold's selection restricted to the effects the table keeps
+  // (RestrictNested; `kept` empty and the figures NaN where no restriction was needed).
+  std::vector<std::string> kept;
+  GapStat simulated_kept;
+  double gain_simulated_kept = NAN, share_moved_kept = NAN;
 };
 
 // The share of the calibrated Σz² (of `calibrated`) that going from `without` to `with` removes,

@@ -32,6 +32,27 @@ Design Subset(const Design& d, const std::vector<char>& cells) {
 
 namespace {
 
+// The held-out cells (`held`) simulated with `fit` added to the base, as [obs] values (NaN
+// elsewhere).
+std::vector<double> SimulateHeld(const Design& d, const Simulations& sims,
+                                 const sim::SimParams& base, const DiagnoseParams& params,
+                                 const std::vector<char>& held, const ModelFit& fit) {
+  const int kk = d.num_metrics();
+  SimulateOptions options = params.simulate;
+  options.threads = 1;  // the folds run side by side
+  const std::vector<double> v =
+      SimulateValues(SelectedParams(sims, base, fit, d), Subset(d, held), options);
+  std::vector<double> mu(d.real.size(), NAN);
+  int i = 0;
+  for (int c = 0; c < d.num_cells(); ++c) {
+    if (!held[c]) continue;
+    for (int k = 0; k < kk; ++k)
+      mu[static_cast<size_t>(c) * kk + k] = v[static_cast<size_t>(i) * kk + k];
+    ++i;
+  }
+  return mu;
+}
+
 // Σz² over the finite entries.
 double SumSq(const std::vector<double>& z) {
   double s = 0;
@@ -58,6 +79,7 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
   std::vector<char> train(d.num_cells(), 0);
   out.held.assign(d.num_cells(), 0);
   NestedFold& nf = out.fold;
+  nf.index = f;
   for (int c = 0; c < d.num_cells(); ++c) {
     train[c] = fold[c] != f;
     out.held[c] = fold[c] == f;
@@ -76,6 +98,11 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
     const Selection sel = Select(model, placement, train, fold, num_folds, one_thread);
     if (!sel.success) throw std::invalid_argument(sel.message);
     for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
+    nf.fit = sel.current;
+    nf.y.assign(obs, NAN);
+    nf.unit.assign(obs, NAN);
+    for (size_t o = 0; o < obs; ++o)
+      if (out.held[o / kk] && model.valid(o)) nf.y[o] = model.y(o), nf.unit[o] = model.noise(o);
     const std::vector<double> mu0 = model.Predict(sel.m0), mu1 = model.Predict(sel.current);
     nf.deviance_calibrated = model.DataDeviance(mu0, out.held);
     nf.deviance_selected = model.DataDeviance(mu1, out.held);
@@ -85,22 +112,9 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
     out.zs.assign(obs, NAN);
     out.zsc.assign(obs, NAN);
     try {
-      const Design sub = Subset(d, out.held);
-      SimulateOptions options = params.simulate;
-      options.threads = 1;  // the folds run side by side
       // The held-out cells simulated with the fold's calibrated base, and with its selection.
       auto simulate = [&](const ModelFit& fit) {
-        const std::vector<double> v = SimulateValues(
-            SelectedParams(sims, base, fit, d), sub, options);
-        std::vector<double> mu(obs, NAN);
-        int i = 0;
-        for (int c = 0; c < d.num_cells(); ++c) {
-          if (!out.held[c]) continue;
-          for (int k = 0; k < kk; ++k)
-            mu[static_cast<size_t>(c) * kk + k] = v[static_cast<size_t>(i) * kk + k];
-          ++i;
-        }
-        return mu;
+        return SimulateHeld(d, sims, base, params, out.held, fit);
       };
       const std::vector<double> mu = simulate(sel.current);
       out.zsc = sel.steps.empty() ? Scaled(model, mu) : Scaled(model, simulate(sel.m0));
@@ -217,6 +231,67 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   }
   n.run = true;
   return n;
+}
+
+bool RestrictNested(const Design& d, const Simulations& sims, const sim::SimParams& base,
+                    const DiagnoseParams& params, const std::vector<int>& fold,
+                    const GapModel& full, const std::vector<std::string>& keep, Nested* n) {
+  if (!n->run || std::isnan(n->gain_simulated)) return false;
+  auto kept = [&](const std::string& e) {
+    return std::find(keep.begin(), keep.end(), e) != keep.end();
+  };
+  bool needed = false;
+  for (const NestedFold& f : n->folds)
+    for (const std::string& e : f.selected) needed |= !kept(e);
+  if (!needed) return false;
+  const int kk = d.num_metrics();
+  std::vector<double> z = n->z_simulated;
+  // The folds side by side, as many at once as the simulation may use threads.
+  std::vector<std::string> failed(n->folds.size());
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i = next++; i < n->folds.size(); i = next++) {
+      const NestedFold& f = n->folds[i];
+      ModelFit part = f.fit;
+      part.terms.clear();
+      for (size_t j = 0; j < f.selected.size() && j < f.fit.terms.size(); ++j)
+        if (kept(f.selected[j])) part.terms.push_back(f.fit.terms[j]);
+      if (part.terms.size() == f.fit.terms.size()) continue;  // its selection is kept whole
+      std::vector<char> held(d.num_cells(), 0);
+      for (int c = 0; c < d.num_cells(); ++c) held[c] = fold[c] == f.index;
+      if (part.terms.empty()) {  // the fold's calibrated base, simulated already
+        for (size_t o = 0; o < z.size(); ++o)
+          if (held[o / kk]) z[o] = n->z_simulated_calibrated[o];
+        continue;
+      }
+      try {
+        const std::vector<double> mu = SimulateHeld(d, sims, base, params, held, part);
+        for (size_t o = 0; o < z.size(); ++o)
+          if (held[o / kk])
+            z[o] = std::isfinite(f.unit[o]) && std::isfinite(mu[o]) ? (f.y[o] - mu[o]) / f.unit[o]
+                                                                     : NAN;
+      } catch (const std::exception& e) {
+        failed[i] = e.what();
+      }
+    }
+  };
+  const int workers =
+      std::max(1, std::min(params.simulate.threads, static_cast<int>(n->folds.size())));
+  std::vector<std::thread> pool;
+  for (int i = 1; i < workers; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  for (const std::string& why : failed)
+    if (!why.empty()) return false;
+  n->kept = keep;
+  n->simulated_kept = Stat(full, z, n->cells);
+  n->gain_simulated_kept = 0;
+  for (size_t o = 0; o < z.size(); ++o) {
+    const double a = n->z_simulated_calibrated[o], b = z[o];
+    if (std::isfinite(a) && std::isfinite(b)) n->gain_simulated_kept += a * a - b * b;
+  }
+  n->share_moved_kept = MovedShare(n->z_simulated_calibrated, z, n->z_simulated_calibrated, kk);
+  return true;
 }
 
 }  // namespace depthbias::gap

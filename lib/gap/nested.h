@@ -1,6 +1,7 @@
 #pragma once
 // The nested cross-validation of the diagnosis (diagnose.h, step 4).
 
+#include <string>
 #include <vector>
 
 #include "gap/diagnose.h"
@@ -15,6 +16,15 @@ namespace depthbias::gap {
 Nested RunNested(const Design& design, const Simulations& sims, const sim::SimParams& base,
                  const DiagnoseParams& params, const std::vector<int>& fold, int num_folds,
                  const GapModel& full);
+
+// Each fold's selection restricted to the effects in `keep` (at the fold's fitted values) and
+// simulated again on its held-out cells, where the restriction leaves out one of its effects:
+// sets n->kept, simulated_kept, gain_simulated_kept and share_moved_kept. False (n unchanged)
+// where no fold selected an effect outside `keep`, the folds were not simulated, or a
+// simulation failed. `fold` and `full` as given to RunNested.
+bool RestrictNested(const Design& design, const Simulations& sims, const sim::SimParams& base,
+                    const DiagnoseParams& params, const std::vector<int>& fold,
+                    const GapModel& full, const std::vector<std::string>& keep, Nested* n);
 
 // The cells of `design` marked in `cells`, scenarios and metrics kept.
 Design Subset(const Design& design, const std::vector<char>& cells);

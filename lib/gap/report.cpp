@@ -171,7 +171,20 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
     w.Null("simulated").Null("simulated_calibrated");
   }
   w.Number("gain", n.gain).Number("gain_simulated", n.gain_simulated);
-  w.Number("share_moved", n.share_moved).EndObject();
+  w.Number("share_moved", n.share_moved);
+  // The folds' selections restricted to the effects earning their own part (null: none left
+  // out), on which the table's keep rule reads the selections' joint part.
+  if (n.kept.empty()) {
+    w.Null("restricted");
+  } else {
+    w.BeginObject("restricted").BeginArray("effects");
+    for (const std::string& e : n.kept) w.String(e);
+    w.EndArray();
+    GapJsonStat(w, "simulated", r, n.simulated_kept);
+    w.Number("gain_simulated", n.gain_simulated_kept).Number("share_moved", n.share_moved_kept);
+    w.EndObject();
+  }
+  w.EndObject();
 }
 
 void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
