@@ -59,6 +59,8 @@ constexpr char kUsage[] =
     "                       repeatable; \"no effect\" for the 20 null tables)\n"
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
     "                       scripts/make_field_campaign.py's bags, offset -0.25 px)\n"
+    "  --inject-into FILE   --cases: also judge effects injected by their physics into this\n"
+    "                       real table (the article's: config/data/paper_d455_outdoor.csv)\n"
     "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
     "simulations). Rows the sensor cannot stand for are left out and listed in gap.json's\n"
     "rows_skipped (exit 1): a preset that is not a D455 preset, a light and preset the sensor\n"
@@ -85,7 +87,7 @@ int main(int argc, char** argv) {
   apps::KeepLargeBlocksForReuse();  // the simulator's histograms: about a tenth of the run time
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs through glog
   io::InstallSignalCleanup();
-  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;
+  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file, inject_csv;
   bool cases = false;
   std::vector<std::string> only_cases;  // --case
   double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
@@ -108,6 +110,7 @@ int main(int argc, char** argv) {
       else if (a == "--threads") threads = args.Number(true, 1, 256);
       else if (a == "--cases") cases = true;
       else if (a == "--field") real_csv = args.Value();
+      else if (a == "--inject-into") inject_csv = args.Value();
       else if (a == "--case") only_cases.push_back(args.Value());
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
@@ -139,12 +142,17 @@ int main(int argc, char** argv) {
     if (!out_dir.empty())
       io::CheckOutputSet(out_dir, cases ? std::vector<std::string>{"cases.md"}
                                         : std::vector<std::string>{"gap.json", "report.md"},
-                         {real_csv, protocol_file, sensor_file}, 4e6);
+                         {real_csv, protocol_file, sensor_file, inject_csv}, 4e6);
 
     if (cases) {  // tables at seeds S + 999 + i, the null suite at S + 1999 + i
       const std::vector<gap::WithheldCase> all = gap::DefaultWithheldCases();
       std::vector<int> only;  // --case: those named (their seeds as in the whole suite)
+      std::vector<gap::WithheldCase> real_cases;  // --inject-into: all, or those named
       bool nulls_too = only_cases.empty();
+      for (const gap::WithheldCase& c : gap::RealInjectionCases())
+        if (only_cases.empty() ||
+            std::find(only_cases.begin(), only_cases.end(), c.name) != only_cases.end())
+          real_cases.push_back(c);
       for (const std::string& name : only_cases) {
         if (name == "no effect") {
           nulls_too = true;
@@ -152,8 +160,12 @@ int main(int argc, char** argv) {
         }
         const auto it = std::find_if(all.begin(), all.end(),
                                      [&](const gap::WithheldCase& c) { return c.name == name; });
-        if (it == all.end()) throw BadInput("--case: no case named '" + name + "'");
-        only.push_back(static_cast<int>(it - all.begin()));
+        const bool real = std::any_of(real_cases.begin(), real_cases.end(),
+                                      [&](const gap::WithheldCase& c) { return c.name == name; });
+        if (it == all.end() && !real) throw BadInput("--case: no case named '" + name + "'");
+        if (real && inject_csv.empty())
+          throw BadInput("--case '" + name + "' needs --inject-into REAL.csv");
+        if (it != all.end()) only.push_back(static_cast<int>(it - all.begin()));
       }
       std::vector<gap::CaseOutcome> outcomes;
       if (only_cases.empty() || !only.empty())
@@ -168,6 +180,13 @@ int main(int argc, char** argv) {
         const std::string json = gap::GapJson(r, params, ctx);
         outcomes.push_back(gap::JudgeCase(json, gap::FieldCampaignCase(), rows));
         outcomes.back().gap_json = json;
+      }
+      if (!inject_csv.empty() && !real_cases.empty()) {  // a real table, effects injected
+        std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(inject_csv);
+        gap::ScreenRows(gap::DesignRulesOf(base.sensor), &rows);
+        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, io::BaseName(inject_csv),
+                                                              real_cases, params))
+          outcomes.push_back(std::move(o));
       }
       const std::vector<gap::CaseOutcome> nulls =
           nulls_too ? gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999)

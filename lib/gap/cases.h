@@ -66,6 +66,11 @@ struct WithheldCase {
   OutsideEffect outside;
   double placement_pct = 2.0;  // σ of each test point's range error, % of its distance
   bool unit = false;           // one light (daylight), one preset (HA): 32 rows
+  // Injected by its physics into a real table's rows (RealInjectionCases), not simulated.
+  bool on_real = false;
+  // on_real, a size below the limit the real table's own report gives: it may go unseen (see
+  // JudgeCase).
+  bool may_go_unseen = false;
 };
 
 // The strict suite: every registered effect at two sizes, a sunset-only disparity offset,
@@ -78,6 +83,21 @@ std::vector<WithheldCase> DefaultWithheldCases();
 // HA, 16 test points × emitter off/on, each disparity read −0.25 px too large), measured by
 // panel_extract: the injected set is that offset.
 WithheldCase FieldCampaignCase();
+// Effects injected by their physics into a real table (the article's 128 rows): the table keeps
+// the camera's own departures, placements, noise and outliers, which no simulator of ours made.
+// A disparity offset and a depth scale in the over-reading (dangerous) direction, each at 1.5
+// and 0.5 times the limit the article's own report gives in that direction.
+std::vector<WithheldCase> RealInjectionCases();
+// The real rows with the case's effects applied by their physics, every row alike (or those of
+// one light): a disparity offset δ reads each depth as Z' = f·B / (f·B / Z + δ) (fb = f·B in
+// px·m): the median maps to Z', the mean's departure from it and the spreads by dZ'/dZ =
+// (Z'/Z)², lengths across the panel (width, height) and the range by Z'/Z, the tilt's tangent
+// by Z'/Z (an inverse-depth plane moved by δ/(f·B)); valid_pct and disparity-unit columns stay.
+// A depth scale s multiplies every length by 1 + s and leaves the tilt. Throws
+// std::invalid_argument for another effect, or an offset that sends a depth beyond infinity.
+std::vector<records::PanelMetrics> InjectIntoRealTable(
+    const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb);
+
 // The null suite: no effect, 2 % placement scatter (tables at seeds seed0 + i).
 std::vector<WithheldCase> NullCases(int count);
 
@@ -106,8 +126,19 @@ struct CaseOutcome {
 
 // Judges one diagnosis, given as the gap.json it wrote, against the case it was made from;
 // rows: the table's rows (ids, test points).
+// reference_json (on_real cases): the diagnosis of the real table as it was. An effect it
+// selects is part of the real table: the size injected is then read as what the injection
+// moved, the fitted value less the reference's (one it does not select is, by the diagnosis's
+// own answer, no effect there: the injected size is the truth). The shrink is the share of
+// the injected part of the nested held-out gap that the selection, simulated, removes beyond
+// what the reference's removes: 100 · ((B − S) − (B₀ − S₀)) / (B − B₀), B and S the nested
+// baseline and simulated gaps. The real table's own departures are not judged. A
+// may_go_unseen case also passes when nothing is selected and the limit gap.json publishes for
+// the effect in the injected direction is at least the injected size (the report says it
+// could go unseen).
 CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
-                      const std::vector<records::PanelMetrics>& rows);
+                      const std::vector<records::PanelMetrics>& rows,
+                      const std::string& reference_json = "");
 
 // Every case's table made at truth_seed + its index and diagnosed with `base` (tables of the
 // same cells share one set of simulations). Throws std::invalid_argument for a case the
@@ -117,6 +148,14 @@ std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
                                           const std::vector<WithheldCase>& cases,
                                           const DiagnoseParams& params, std::uint64_t truth_seed,
                                           const std::vector<int>& only = {});
+
+// The real table (rows; its name for errors) diagnosed as it is, then with each case injected
+// (InjectIntoRealTable, f·B of base.sensor): one set of simulations for all.
+std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
+                                               const std::vector<records::PanelMetrics>& real,
+                                               const std::string& name,
+                                               const std::vector<WithheldCase>& cases,
+                                               const DiagnoseParams& params);
 
 // The cases as a Markdown table; the null suite summarized in one row when given.
 std::string FormatCases(const std::vector<CaseOutcome>& outcomes,

@@ -238,16 +238,77 @@ Truth TruthIn(const Injection& in, const std::string& scenario, const Axis& axis
   return t;
 }
 
+// A fitted parameter's value in a scenario ("light/preset") from an effect's params: one value,
+// or one per light or per scenario.
+double ValueIn(const Json& params, const std::string& scenario, const std::string& param) {
+  const bool grouped =
+      !params.members.empty() && params.members.front().second.type == Json::kObject;
+  const Json* group = !grouped                ? &params
+                      : params.Find(scenario) ? params.Find(scenario)
+                                              : params.Find(LightOf(scenario));
+  const Json* v = group ? group->Find(param) : nullptr;
+  return v && v->type == Json::kNumber ? v->number : NAN;
+}
+
+// The params of a selected effect in gap.json, or nullptr.
+const Json* FittedParams(const Json& root, const std::string& effect) {
+  if (const Json* selected = root.Find("selected"))
+    for (const Json& e : selected->items)
+      if (const Json* name = e.Find("name"); name && name->text == effect) return e.Find("params");
+  return nullptr;
+}
+bool Selected(const Json& root, const std::string& effect) {
+  return FittedParams(root, effect) != nullptr;
+}
+
+// how_far.nested.<key>.overall, NaN where absent.
+double NestedGap(const Json& root, const char* key) {
+  const Json* how = root.Find("how_far");
+  const Json* nested = how ? how->Find("nested") : nullptr;
+  const Json* gap = nested ? nested->Find(key) : nullptr;
+  const Json* overall = gap ? gap->Find("overall") : nullptr;
+  return overall && overall->type == Json::kNumber ? overall->number : NAN;
+}
+
+// Whether the limit gap.json publishes for the effect's parameter, in the direction of `value`
+// from the neutral one, is at least as far as `value` (no size kept within the grid: it is).
+bool LimitCovers(const Json& root, const std::string& effect, const std::string& param,
+                 double value, double neutral, std::string* shown) {
+  const Json* limits = root.Find("detection_limits");
+  const Json* list = limits ? limits->Find("effects") : nullptr;
+  if (!list) return false;
+  for (const Json& e : list->items) {
+    const Json* name = e.Find("effect");
+    const Json* p = e.Find("param");
+    if (!name || !p || name->text != effect || p->text != param) continue;
+    const Json* side = e.Find(value < neutral ? "below" : "above");
+    const Json* size = side ? side->Find("size") : nullptr;
+    if (!size) return false;
+    if (size->type == Json::kNull) return *shown = "no size within the grid", true;
+    if (size->type != Json::kNumber) return false;
+    *shown = param + " " + Num(size->number);
+    return std::fabs(size->number - neutral) >= std::fabs(value - neutral);
+  }
+  return false;
+}
+
 }  // namespace
 
 CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
-                      const std::vector<records::PanelMetrics>& rows) {
+                      const std::vector<records::PanelMetrics>& rows,
+                      const std::string& reference_json) {
   CaseOutcome o;
   o.truth = truth;
   o.unexplained = "-";
-  Json root;
+  Json root, reference;
   if (!Parser(gap_json).Parse(&root) || root.type != Json::kObject) {
     o.why = "gap.json does not parse";
+    return o;
+  }
+  const bool on_reference = !reference_json.empty();
+  if (on_reference &&
+      (!Parser(reference_json).Parse(&reference) || reference.type != Json::kObject)) {
+    o.why = "the reference's gap.json does not parse";
     return o;
   }
   auto fail = [&](const std::string& why) { o.why += (o.why.empty() ? "" : "; ") + why; };
@@ -365,9 +426,12 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
         if (!std::isfinite(t.value)) continue;  // a shape parameter where the effect is absent
         // Per scenario: the scenario's values; per light: its light's.
         const std::string key = params.Find(sc) ? sc : LightOf(sc);
-        const Json* group = grouped ? params.Find(key) : &params;
-        const Json* v = group ? group->Find(axis.param) : nullptr;
-        const double got_v = v && v->type == Json::kNumber ? v->number : NAN;
+        double got_v = ValueIn(params, sc, axis.param);
+        if (on_reference && Selected(reference, in.effect)) {
+          // What the injection moved: less the real table's own size of it.
+          const Json* ref = FittedParams(reference, in.effect);
+          got_v = ref ? got_v - ValueIn(*ref, sc, axis.param) + axis.neutral : NAN;
+        }
         double err = std::fabs(got_v - t.value) / scale;
         if (axis.discrete) err = got_v == t.value ? 0.0 : INFINITY;
         if (!std::isfinite(got_v)) err = INFINITY;
@@ -392,6 +456,14 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
       published = true;
       if (s->type == Json::kNumber) o.shrink_simulated_pct = s->number;
     }
+  if (on_reference) {  // the injected part of the nested gap, and what the selection removes
+    const double b = NestedGap(root, "baseline"), b0 = NestedGap(reference, "baseline");
+    const double part = b - b0;
+    o.shrink_simulated_pct =
+        part > 0 ? 100 * ((b - NestedGap(root, "simulated")) -
+                          (b0 - NestedGap(reference, "simulated"))) / part
+                 : NAN;
+  }
   if (!truth.injected.empty()) {
     if (!published) fail("no how_far.shrink_simulated_pct");
     else if (!std::isfinite(o.shrink_simulated_pct)) fail("no held-out gap beyond noise to shrink");
@@ -436,6 +508,23 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     }
     if (!u) fail("no unexplained in gap.json");
     else if (!inside || !hits) fail("unexplained does not name the right cells");
+  }
+  // Below the real table's limit: not selecting it is an answer when the published limit says
+  // an effect that size could go unseen.
+  if (truth.may_go_unseen && o.selected.empty() && truth.injected.size() == 1 &&
+      truth.injected[0].params.size() == 1) {
+    const Injection& in = truth.injected[0];
+    const auto& [param, value] = *in.params.begin();
+    double neutral = 0;
+    for (const Candidate& c : DefaultCandidates())
+      if (c.effect == in.effect && !c.axes.empty() && std::isfinite(c.axes[0].neutral))
+        neutral = c.axes[0].neutral;
+    std::string shown;
+    if (LimitCovers(root, in.effect, param, value, neutral, &shown)) {
+      o.why.clear();
+      o.max_rel_error = NAN;
+      o.recovered[in.effect] = "not selected; could go unseen up to " + shown;
+    }
   }
   o.pass = o.why.empty();
   return o;
