@@ -60,7 +60,9 @@ constexpr char kUsage[] =
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
     "                       scripts/make_field_campaign.py's bags, offset -0.25 px)\n"
     "  --inject-into FILE   --cases: also judge effects injected by their physics into this\n"
-    "                       real table (the article's: config/data/paper_d455_outdoor.csv)\n"
+    "                       real table, at 1.5 and 0.5 times its own limits (repeatable;\n"
+    "                       cases named after the file: \"STEM + disparity_offset (1.5 × its\n"
+    "                       limit)\")\n"
     "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
     "simulations). Rows the sensor cannot stand for are left out and listed in gap.json's\n"
     "rows_skipped (exit 1): a preset that is not a D455 preset, a light and preset the sensor\n"
@@ -87,7 +89,8 @@ int main(int argc, char** argv) {
   apps::KeepLargeBlocksForReuse();  // the simulator's histograms: about a tenth of the run time
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs through glog
   io::InstallSignalCleanup();
-  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file, inject_csv;
+  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;
+  std::vector<std::string> inject_csvs;  // --inject-into
   bool cases = false;
   std::vector<std::string> only_cases;  // --case
   double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
@@ -110,7 +113,7 @@ int main(int argc, char** argv) {
       else if (a == "--threads") threads = args.Number(true, 1, 256);
       else if (a == "--cases") cases = true;
       else if (a == "--field") real_csv = args.Value();
-      else if (a == "--inject-into") inject_csv = args.Value();
+      else if (a == "--inject-into") inject_csvs.push_back(args.Value());
       else if (a == "--case") only_cases.push_back(args.Value());
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
@@ -121,6 +124,8 @@ int main(int argc, char** argv) {
     }
     params.simulate.frames = static_cast<int>(frames);
     params.simulate.threads = static_cast<int>(threads);
+    if (!cases && !inject_csvs.empty())
+      throw BadInput("--inject-into goes with --cases (see diagnose_gap --help)");
     if (!cases && (real_csv.empty() || out_dir.empty()))
       throw BadInput("--real REAL.csv and --out DIR are required (see diagnose_gap --help)");
     std::string why, named_sensor;
@@ -142,17 +147,18 @@ int main(int argc, char** argv) {
     if (!out_dir.empty())
       io::CheckOutputSet(out_dir, cases ? std::vector<std::string>{"cases.md"}
                                         : std::vector<std::string>{"gap.json", "report.md"},
-                         {real_csv, protocol_file, sensor_file, inject_csv}, 4e6);
+                         [&] {
+                           std::vector<std::string> inputs{real_csv, protocol_file, sensor_file};
+                           inputs.insert(inputs.end(), inject_csvs.begin(), inject_csvs.end());
+                           return inputs;
+                         }(),
+                         4e6);
 
     if (cases) {  // tables at seeds S + 999 + i, the null suite at S + 1999 + i
       const std::vector<gap::WithheldCase> all = gap::DefaultWithheldCases();
       std::vector<int> only;  // --case: those named (their seeds as in the whole suite)
-      std::vector<gap::WithheldCase> real_cases;  // --inject-into: all, or those named
+      std::vector<std::string> only_real;  // --inject-into's cases named
       bool nulls_too = only_cases.empty();
-      for (const gap::WithheldCase& c : gap::RealInjectionCases())
-        if (only_cases.empty() ||
-            std::find(only_cases.begin(), only_cases.end(), c.name) != only_cases.end())
-          real_cases.push_back(c);
       for (const std::string& name : only_cases) {
         if (name == "no effect") {
           nulls_too = true;
@@ -160,11 +166,11 @@ int main(int argc, char** argv) {
         }
         const auto it = std::find_if(all.begin(), all.end(),
                                      [&](const gap::WithheldCase& c) { return c.name == name; });
-        const bool real = std::any_of(real_cases.begin(), real_cases.end(),
-                                      [&](const gap::WithheldCase& c) { return c.name == name; });
+        const bool real = gap::IsRealInjectionCase(name);
         if (it == all.end() && !real) throw BadInput("--case: no case named '" + name + "'");
-        if (real && inject_csv.empty())
+        if (real && inject_csvs.empty())
           throw BadInput("--case '" + name + "' needs --inject-into REAL.csv");
+        if (real) only_real.push_back(name);
         if (it != all.end()) only.push_back(static_cast<int>(it - all.begin()));
       }
       std::vector<gap::CaseOutcome> outcomes;
@@ -181,13 +187,21 @@ int main(int argc, char** argv) {
         outcomes.push_back(gap::JudgeCase(json, gap::FieldCampaignCase(), rows));
         outcomes.back().gap_json = json;
       }
-      if (!inject_csv.empty() && !real_cases.empty()) {  // a real table, effects injected
-        std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(inject_csv);
+      // Real tables, effects injected (--inject-into): all their cases, or those named.
+      for (const std::string& csv : (only_cases.empty() || !only_real.empty())
+                                        ? inject_csvs
+                                        : std::vector<std::string>{}) {
+        std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(csv);
         gap::ScreenRows(gap::DesignRulesOf(base.sensor), &rows);
-        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, io::BaseName(inject_csv),
-                                                              real_cases, params))
+        std::string label = io::BaseName(csv);
+        label = label.substr(0, label.rfind('.'));
+        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, label, params, only_real))
           outcomes.push_back(std::move(o));
       }
+      for (const std::string& name : only_real)
+        if (std::none_of(outcomes.begin(), outcomes.end(),
+                         [&](const gap::CaseOutcome& o) { return o.truth.name == name; }))
+          throw BadInput("--case: no case named '" + name + "' on the --inject-into tables");
       const std::vector<gap::CaseOutcome> nulls =
           nulls_too ? gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999)
                     : std::vector<gap::CaseOutcome>{};

@@ -4,9 +4,10 @@
 # every registered effect at two sizes, a sunset-only disparity offset, offset + drift,
 # offset + scale, an offset at the noise floor, effects outside the registry, a user's unit
 # of 32 rows (simulated), a user's unit recorded as field bags (scripts/make_field_campaign.py,
-# through panel_extract), effects injected by their physics into the article's 128 real rows
-# (a disparity offset and a depth scale at 1.5 and 0.5 times the limits its report gives;
-# judged on what the injection moved), and 20 tables without effect. A case passes only when
+# through panel_extract), effects injected by their physics into real tables (the article's
+# 128 rows; a user's field campaign of 32, tests/data/field_unit_seed11.csv): a disparity
+# offset and a depth scale at 1.5 and 0.5 times the limits each table's own report gives,
+# judged on what the injection moved; and 20 tables without effect. A case passes only when
 # the selected set equals the injected set (outside the registry: nothing selected,
 # `unexplained` names the right cells), sizes are within 20 %, and the simulated held-out shrink
 # is >= 70 % (of the injected part, on the article); the null suite when at least 19 of 20
@@ -41,7 +42,7 @@ OUT_DIR=${ARGS[1]:-}
 APP="$BUILD_DIR/apps/diagnose_gap"
 EXTRACT="$BUILD_DIR/apps/panel_extract"
 [ -x "$APP" ] || { echo "gap_cases: $APP not built (run scripts/build.sh)" >&2; exit 1; }
-OPTS=(--inject-into config/data/paper_d455_outdoor.csv)
+OPTS=(--inject-into config/data/paper_d455_outdoor.csv --inject-into tests/data/field_unit_seed11.csv)
 [ -n "$OUT_DIR" ] && OPTS+=(--out "$OUT_DIR")
 if [ "$FIELD" = 1 ]; then
   [ -x "$EXTRACT" ] || { echo "gap_cases: $EXTRACT not built" >&2; exit 1; }

@@ -161,7 +161,7 @@ def limits_table(runs, paths):
     nulls, null_obs = null_limits(paths)
     rows = []
     for case in list(runs[0][1]):
-        if case.startswith(REAL):  # the article's own limits decide there (gap.json)
+        if is_real(case):  # a real table's own limits size them (gap.json)
             continue
         injected_text = runs[0][1][case][2]
         sizes = injected_sizes(injected_text)
@@ -203,8 +203,12 @@ def limits_table(runs, paths):
                                                                found, len(runs)))
 
 
-# The cases injected into the article's real rows (lib/gap/cases_real.cpp), counted apart.
-REAL = "article + "
+# The cases injected into real tables (lib/gap/cases_real.cpp), counted apart.
+REAL_CASE = re.compile(r" \+ .* \((0\.5|1\.5) × its limit\)$")
+
+
+def is_real(case):
+    return bool(REAL_CASE.search(case))
 
 
 def fmt(v):
@@ -232,7 +236,7 @@ def main(argv):
     total = real_total = 0
     for case in cases:
         passing = [str(s) for s, t in runs if case in t and t[case][1]]
-        if case.startswith(REAL):
+        if is_real(case):
             real_total += len(passing)
         elif not case.startswith("no effect"):
             total += len(passing)
@@ -240,13 +244,13 @@ def main(argv):
                              for s, t in runs)
         print("| %s | %d of %d | %s | %s |" % (case, len(passing), n, ", ".join(passing) or "-",
                                              selected))
-    with_effect = [c for c in cases if not c.startswith("no effect") and not c.startswith(REAL)]
-    real = [c for c in cases if c.startswith(REAL)]
+    with_effect = [c for c in cases if not c.startswith("no effect") and not is_real(c)]
+    real = [c for c in cases if is_real(c)]
     print()
     print("Cases with an effect or outside it: %d passes of %d (%d cases x %d seeds)."
           % (total, len(with_effect) * n, len(with_effect), n))
     if real:
-        print("Effects injected into the article's rows: %d passes of %d (%d cases x %d seeds)."
+        print("Effects injected into real tables: %d passes of %d (%d cases x %d seeds)."
               % (real_total, len(real) * n, len(real), n))
     held = []
     for (seed, table), path in zip(runs, argv[1:]):

@@ -83,11 +83,16 @@ std::vector<WithheldCase> DefaultWithheldCases();
 // HA, 16 test points × emitter off/on, each disparity read −0.25 px too large), measured by
 // panel_extract: the injected set is that offset.
 WithheldCase FieldCampaignCase();
-// Effects injected by their physics into a real table (the article's 128 rows): the table keeps
-// the camera's own departures, placements, noise and outliers, which no simulator of ours made.
-// A disparity offset and a depth scale in the over-reading (dangerous) direction, each at 1.5
-// and 0.5 times the limit the article's own report gives in that direction.
-std::vector<WithheldCase> RealInjectionCases();
+// Effects injected by their physics into a real table (the article's 128 rows, a user's
+// campaign): the table keeps the camera's own departures, placements, noise and outliers, which
+// no simulator of ours made. A disparity offset and a depth scale in the over-reading
+// (dangerous) direction, each at 1.5 and 0.5 times the limit the table's own diagnosis
+// publishes on that side (`limits`; 3 significant digits), named "LABEL + effect (1.5 × its
+// limit)"; an effect whose limit that way lies beyond its grid is left out.
+std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
+                                            const std::string& label);
+// Whether a case name is one RealInjectionCases gives.
+bool IsRealInjectionCase(const std::string& name);
 // The real rows with the case's effects applied by their physics, every row alike (or those of
 // one light): a disparity offset δ reads each depth as Z' = f·B / (f·B / Z + δ) (fb = f·B in
 // px·m): the median maps to Z', the mean's departure from it and the spreads by dZ'/dZ =
@@ -126,16 +131,18 @@ struct CaseOutcome {
 
 // Judges one diagnosis, given as the gap.json it wrote, against the case it was made from;
 // rows: the table's rows (ids, test points).
-// reference_json (on_real cases): the diagnosis of the real table as it was. An effect it
-// selects is part of the real table: the size injected is then read as what the injection
-// moved, the fitted value less the reference's (one it does not select is, by the diagnosis's
-// own answer, no effect there: the injected size is the truth). The shrink is the share of
-// the injected part of the nested held-out gap that the selection, simulated, removes beyond
-// what the reference's removes: 100 · ((B − S) − (B₀ − S₀)) / (B − B₀), B and S the nested
-// baseline and simulated gaps. The real table's own departures are not judged. A
-// may_go_unseen case also passes when nothing is selected and the limit gap.json publishes for
-// the effect in the injected direction is at least the injected size (the report says it
-// could go unseen).
+// reference_json (on_real cases, and only those): the diagnosis of the real table as it was.
+// What it selects is the table's: an effect it selects that was not injected is no wrong
+// answer, and one that was is read as what the injection moved (the fitted value less the
+// reference's; a depth scale by ratio, (1 + s)/(1 + s₀) − 1). An effect it does not select is,
+// by the diagnosis's own answer, absent there: the injected size is the truth. The shrink is
+// the share of the injected part of the nested held-out gap that the selection, simulated,
+// removes beyond what the reference's removes: 100 · ((B − S) − (B₀ − S₀)) / (B − B₀), B and S
+// the nested baseline and simulated gaps, each table in its own noise units (its twins, which
+// the injection scales too: an approximate reading). A may_go_unseen case also passes when
+// nothing beyond the reference's selection is selected and the limit the injected table's
+// gap.json publishes (the report a user reads) in the injected direction reaches the injected
+// size.
 CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
                       const std::vector<records::PanelMetrics>& rows,
                       const std::string& reference_json = "");
@@ -149,13 +156,14 @@ std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
                                           const DiagnoseParams& params, std::uint64_t truth_seed,
                                           const std::vector<int>& only = {});
 
-// The real table (rows; its name for errors) diagnosed as it is, then with each case injected
-// (InjectIntoRealTable, f·B of base.sensor): one set of simulations for all.
+// The real table diagnosed as it is (the reference, whose limits size the cases), then with
+// each of its RealInjectionCases injected (InjectIntoRealTable, f·B of base.sensor), one set
+// of simulations for all; `only`: the names of the cases to run (all when empty).
 std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
                                                const std::vector<records::PanelMetrics>& real,
-                                               const std::string& name,
-                                               const std::vector<WithheldCase>& cases,
-                                               const DiagnoseParams& params);
+                                               const std::string& label,
+                                               const DiagnoseParams& params,
+                                               const std::vector<std::string>& only = {});
 
 // The cases as a Markdown table; the null suite summarized in one row when given.
 std::string FormatCases(const std::vector<CaseOutcome>& outcomes,

@@ -306,6 +306,11 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     return o;
   }
   const bool on_reference = !reference_json.empty();
+  if (truth.on_real != on_reference) {
+    o.why = on_reference ? "a reference given for a simulated case"
+                         : "a case on a real table judged without its reference";
+    return o;
+  }
   if (on_reference &&
       (!Parser(reference_json).Parse(&reference) || reference.type != Json::kObject)) {
     o.why = "the reference's gap.json does not parse";
@@ -322,8 +327,11 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
         fitted[name->text] = s.Find("params");
         if (const Json* sc = s.Find("scope")) scope[name->text] = sc->text;
       }
-  std::set<std::string> want, got(o.selected.begin(), o.selected.end());
+  std::set<std::string> want, got;
   for (const Injection& in : truth.injected) want.insert(in.effect);
+  // On a real table, what its own diagnosis selects (and was not injected) is the table's.
+  for (const std::string& e : o.selected)
+    if (!on_reference || want.count(e) || !Selected(reference, e)) got.insert(e);
   // An injected effect the table cannot tell from the calibration (a gain on σ_d or on the hole
   // probability, where each scenario's σ_d and p are calibrated) is never selected: it is
   // answered when gap.json names it "one of" with the calibration, with the size it would need
@@ -430,7 +438,10 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
         if (on_reference && Selected(reference, in.effect)) {
           // What the injection moved: less the real table's own size of it.
           const Json* ref = FittedParams(reference, in.effect);
-          got_v = ref ? got_v - ValueIn(*ref, sc, axis.param) + axis.neutral : NAN;
+          const double own = ref ? ValueIn(*ref, sc, axis.param) : NAN;
+          // A scale composes by product: (1 + s₀)(1 + s) = 1 + fitted.
+          got_v = in.effect == "depth_scale" ? (1 + got_v) / (1 + own) - 1
+                                             : got_v - own + axis.neutral;
         }
         double err = std::fabs(got_v - t.value) / scale;
         if (axis.discrete) err = got_v == t.value ? 0.0 : INFINITY;
@@ -511,7 +522,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   }
   // Below the real table's limit: not selecting it is an answer when the published limit says
   // an effect that size could go unseen.
-  if (truth.may_go_unseen && o.selected.empty() && truth.injected.size() == 1 &&
+  if (truth.may_go_unseen && got.empty() && truth.injected.size() == 1 &&
       truth.injected[0].params.size() == 1) {
     const Injection& in = truth.injected[0];
     const auto& [param, value] = *in.params.begin();

@@ -1,6 +1,9 @@
 // Effects injected by their physics into a real table's rows (cases.h): the proof on a table
 // whose background (placements, noise, the camera's own departures) no simulator of ours made.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <stdexcept>
 
@@ -28,33 +31,44 @@ void MapRow(double length, double spread, double tilt, records::PanelMetrics* m)
 
 }  // namespace
 
-std::vector<WithheldCase> RealInjectionCases() {
-  // The limits the article's report gives (docs/gap/report.md, "could go unseen"): an
-  // over-reading disparity offset is kept from −0.653 px (2.9 m at 16 m), an over-reading depth
-  // scale from +0.107 (1.6 m). Sizes fixed from those before any of these tables was diagnosed.
-  struct Size {
-    const char* effect;
-    const char* param;
-    double value;
-    bool below;
-  };
-  const Size sizes[] = {{"disparity_offset", "delta_px", -0.98, false},
-                        {"disparity_offset", "delta_px", -0.33, true},
-                        {"depth_scale", "scale_rel", 0.16, false},
-                        {"depth_scale", "scale_rel", 0.053, true}};
+std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
+                                            const std::string& label) {
   std::vector<WithheldCase> out;
-  for (const Size& s : sizes) {
-    WithheldCase c;
-    c.name = std::string("article + ") + s.effect +
-             (s.below ? " (0.5 × its limit)" : " (1.5 × its limit)");
-    c.family = "real";
-    c.on_real = true;
-    c.may_go_unseen = s.below;
-    c.placement_pct = 0;  // the article's own placements
-    c.injected = {{s.effect, {{s.param, s.value}}, ""}};
-    out.push_back(c);
+  for (const char* effect : {"disparity_offset", "depth_scale"}) {
+    const DetectionLimit* limit = nullptr;
+    for (const DetectionLimit& e : limits.effects)
+      if (e.effect == effect) limit = &e;
+    if (!limit) continue;
+    // The over-reading side: the one whose limit adds a positive median bias far away.
+    int side = -1;
+    for (int i = 0; i < 2; ++i)
+      if (std::isfinite(limit->size[i]) && limit->far_m[i] > 0) side = i;
+    if (side < 0) continue;  // no size inside the grid would be kept that way
+    for (const double times : {1.5, 0.5}) {
+      WithheldCase c;
+      c.name = label + " + " + effect + (times == 1.5 ? " (1.5 × its limit)" : " (0.5 × its limit)");
+      c.family = "real";
+      c.on_real = true;
+      c.may_go_unseen = times < 1;
+      c.placement_pct = 0;  // the table's own placements
+      const double size = limit->neutral + times * (limit->size[side] - limit->neutral);
+      char rounded[32];
+      std::snprintf(rounded, sizeof rounded, "%.3g", size);
+      c.injected = {{effect, {{limit->param, std::atof(rounded)}}, ""}};
+      out.push_back(c);
+    }
   }
   return out;
+}
+
+bool IsRealInjectionCase(const std::string& name) {
+  for (const char* tail : {" (1.5 × its limit)", " (0.5 × its limit)"}) {
+    const std::string t(tail);
+    if (name.size() > t.size() && name.compare(name.size() - t.size(), t.size(), t) == 0 &&
+        name.find(" + ") != std::string::npos)
+      return true;
+  }
+  return false;
 }
 
 std::vector<records::PanelMetrics> InjectIntoRealTable(
@@ -88,33 +102,39 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
 
 std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
                                                const std::vector<records::PanelMetrics>& real,
-                                               const std::string& name,
-                                               const std::vector<WithheldCase>& cases,
-                                               const DiagnoseParams& params) {
+                                               const std::string& label,
+                                               const DiagnoseParams& params,
+                                               const std::vector<std::string>& only) {
   std::vector<Candidate> candidates;
   std::string why;
   if (!SelectCandidates(params.candidates, &candidates, &why)) throw std::invalid_argument(why);
   Design design;
-  if (!BuildDesign(real, &design, &why)) throw std::invalid_argument(name + ": " + why);
+  if (!BuildDesign(real, &design, &why)) throw std::invalid_argument(label + ": " + why);
   SimulateOptions options = params.simulate;
   options.replica = static_cast<int>(design.pairs.size()) < kMinReplicatePairs;
   const Simulations sims = SimulateDesign(base, design, candidates, options);
-  auto diagnose = [&](const std::vector<records::PanelMetrics>& rows, const std::string& label) {
+  auto diagnose = [&](const std::vector<records::PanelMetrics>& rows, const std::string& name) {
     Design d;
     std::string w;
-    if (!BuildDesign(rows, &d, &w)) throw std::invalid_argument(label + ": " + w);
-    const DiagnoseResult r = DiagnoseWith(d, sims, base, params);
-    if (!r.success) throw std::invalid_argument(label + ": " + r.message);
-    return GapJson(r, params, ReportContext{label, "", "", "", base.seed, ""});
+    if (!BuildDesign(rows, &d, &w)) throw std::invalid_argument(name + ": " + w);
+    if (!sims.Matches(d)) throw std::invalid_argument(name + ": not the real table's cells");
+    DiagnoseResult r = DiagnoseWith(d, sims, base, params);
+    if (!r.success) throw std::invalid_argument(name + ": " + r.message);
+    return r;
   };
-  const std::string reference = diagnose(real, name);
+  auto json = [&](const DiagnoseResult& r, const std::string& name) {
+    return GapJson(r, params, ReportContext{name, "", "", "", base.seed, ""});
+  };
+  const DiagnoseResult reference = diagnose(real, label);
+  const std::string reference_json = json(reference, label);
   const double fb = base.sensor.focal_px() * base.sensor.baseline_m;
   std::vector<CaseOutcome> out;
-  for (const WithheldCase& c : cases) {
+  for (const WithheldCase& c : RealInjectionCases(reference.limits, label)) {
+    if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end()) continue;
     const std::vector<records::PanelMetrics> rows = InjectIntoRealTable(real, c, fb);
-    const std::string json = diagnose(rows, c.name);
-    out.push_back(JudgeCase(json, c, rows, reference));
-    out.back().gap_json = json;
+    const std::string j = json(diagnose(rows, c.name), c.name);
+    out.push_back(JudgeCase(j, c, rows, reference_json));
+    out.back().gap_json = j;
   }
   return out;
 }

@@ -301,66 +301,83 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       // three folds of four selected the offset (its own part 20 % of their gap), and the fold
       // holding 12 m out an edge mixing that lost 326 of its 769 simulated Σz²: the folds'
       // selections removed 9.2 % of the calibrated gap and the offset was dropped.
-      if (!own_earners.empty())
-        RestrictNested(design, sims, base, params, fold, model, own_earners, &r.nested);
-      const bool restricted = !r.nested.kept.empty();
-      const double joint_gain = restricted ? r.nested.gain_simulated_kept : r.nested.gain_simulated;
-      const GapStat& joint = restricted ? r.nested.simulated_kept : r.nested.simulated;
-      // The selection's part, pooled over the folds: of the whole calibrated gap [0], and of
-      // its part in the metrics the selections move [1] (MovedShare).
-      const double calibrated = r.nested.simulated_calibrated.overall;
-      const double sel_pct[2] = {
-          calibrated > 0 ? 100 * (calibrated - joint.overall) / calibrated : NAN,
-          100 * (restricted ? r.nested.share_moved_kept : r.nested.share_moved)};
-      for (size_t i = 0; i < r.steps.size(); ++i) {
-        const Own& w = own[i];
-        // The guards read shares of the calibrated base's held-out Σz², noise included, not of
-        // its excess over the noise (Shrink): on a table without effect the excess is small,
-        // and a tenth of it is earned by chance (3 of 20 null tables at seed 1 kept an offset
-        // or a range-vs-depth weight that removed 2.7–6 % of the whole). An effect earns by
-        // either reading, each with its own floors (DiagnoseParams): a share of the whole gap,
-        // or a larger share of the gap in the metrics it moves. Read in the whole only, a range
-        // law is judged against gaps it cannot touch: on the article's table the held-out gap
-        // sits in the emitter's valid_pct and the 4 m plane_std, and a depth scale of +12 %
-        // (1.8 m at 16 m) would not remove a tenth of it.
-        bool by[2] = {false, false};
-        const bool simulated = !std::isnan(r.nested.gain_simulated);
-        for (int m = 0; m < 2; ++m)
-          by[m] = sel_pct[m] >= sel_need[m] &&
-                  (!w.known || w.count == 0 || w.pct[m] >= own_need[m]);
-        // The folds' selections must earn on their held-out cells as the simulator reproduces
-        // them; as the fits predict them only where the folds were not simulated. The fits'
-        // prediction interpolates the candidates' surfaces, and where the two disagree the
-        // surfaces are wrong there, not the effect: a depth scale of 0.06 at seed 3, selected
-        // by all four folds and simulated, removed 46 % of their calibrated gap, while the
-        // fold holding 4 m out predicted a tilt 55 times the noise at 4 m from a surface whose
-        // node at −0.12 loses the sunset HA panel (its tilt 67°), spread by the average over
-        // placement (smooth.h) over the line.
-        const bool held_out_earns =
-            simulated ? joint_gain > 0 && (by[0] || by[1]) : r.nested.gain > 0;
-        const bool earns = held_out_earns && w.earns;
-        if (earns) {
-          keep[i] = 1;
-          continue;
+      // The set read together is brought to the one kept: an effect that earns its own part by
+      // one reading and the joint part only by the other is dropped, and the others are read
+      // again without it.
+      std::vector<std::string> together = own_earners;
+      const bool simulated = !std::isnan(r.nested.gain_simulated);
+      for (int pass = 0;; ++pass) {
+        if (!together.empty())
+          RestrictNested(design, sims, base, params, fold, model, together, &r.nested);
+        const bool restricted = !r.nested.kept.empty();
+        const double joint_gain =
+            restricted ? r.nested.gain_simulated_kept : r.nested.gain_simulated;
+        const GapStat& joint = restricted ? r.nested.simulated_kept : r.nested.simulated;
+        // The selection's part, pooled over the folds: of the whole calibrated gap [0], and of
+        // its part in the metrics the selections move [1] (MovedShare).
+        const double calibrated = r.nested.simulated_calibrated.overall;
+        const double sel_pct[2] = {
+            calibrated > 0 ? 100 * (calibrated - joint.overall) / calibrated : NAN,
+            100 * (restricted ? r.nested.share_moved_kept : r.nested.share_moved)};
+        std::vector<std::string> kept;
+        std::vector<std::string> why(r.steps.size());
+        for (size_t i = 0; i < r.steps.size(); ++i) {
+          const Own& w = own[i];
+          // The guards read shares of the calibrated base's held-out Σz², noise included, not
+          // of its excess over the noise (Shrink): on a table without effect the excess is
+          // small, and a tenth of it is earned by chance (3 of 20 null tables at seed 1 kept an
+          // offset or a range-vs-depth weight that removed 2.7–6 % of the whole). An effect
+          // earns by either reading, each with its own floors (DiagnoseParams): a share of the
+          // whole gap, or a larger share of the gap in the metrics it moves. Read in the whole
+          // only, a range law is judged against gaps it cannot touch: on the article's table
+          // the held-out gap sits in the emitter's valid_pct and the 4 m plane_std, and a depth
+          // scale of +12 % (1.8 m at 16 m) would not remove a tenth of it.
+          bool by[2] = {false, false};
+          for (int m = 0; m < 2; ++m)
+            by[m] = sel_pct[m] >= sel_need[m] &&
+                    (!w.known || w.count == 0 || w.pct[m] >= own_need[m]);
+          // The folds' selections must earn on their held-out cells as the simulator
+          // reproduces them; as the fits predict them only where the folds were not simulated.
+          // The fits' prediction interpolates the candidates' surfaces, and where the two
+          // disagree the surfaces are wrong there, not the effect: a depth scale of 0.06 at
+          // seed 3, selected by all four folds and simulated, removed 46 % of their calibrated
+          // gap, while the fold holding 4 m out predicted a tilt 55 times the noise at 4 m from
+          // a surface whose node at −0.12 loses the sunset HA panel (its tilt 67°), spread by
+          // the average over placement (smooth.h) over the line.
+          const bool held_out_earns =
+              simulated ? joint_gain > 0 && (by[0] || by[1]) : r.nested.gain > 0;
+          keep[i] = held_out_earns && w.earns;
+          if (keep[i]) {
+            kept.push_back(r.steps[i].effect);
+            continue;
+          }
+          auto need = [&](double v) { return " (" + Num(v) + " % needed)"; };
+          why[i] =
+              r.steps[i].effect + " (selected in " + std::to_string(w.count) + " of " +
+              std::to_string(r.nested.folds.size()) + " outer folds; the folds' selections gain " +
+              Num(r.nested.gain) + " held out" +
+              (simulated ? std::string(restricted ? "; restricted to those carrying their own "
+                                                    "part, "
+                                                  : ", ") +
+                               Num(joint_gain) + " simulated, removing " + Num(sel_pct[0]) +
+                               " % of the calibrated base's gap" + need(sel_need[0]) + " and " +
+                               Num(sel_pct[1]) + " % of its part in the metrics they move" +
+                               need(sel_need[1])
+                         : std::string()) +
+              (std::isnan(w.pct[0])
+                   ? std::string()
+                   : "; left out of them, an outer fold's calibrated gap comes back by " +
+                         Num(w.pct[0]) + " % on average" + need(own_need[0]) +
+                         ", its part in the metrics it moves by " + Num(w.pct[1]) + " %" +
+                         need(own_need[1])) +
+              ")";
         }
-        auto need = [&](double v) { return " (" + Num(v) + " % needed)"; };
-        r.dropped.push_back(
-            r.steps[i].effect + " (selected in " + std::to_string(w.count) + " of " +
-            std::to_string(r.nested.folds.size()) + " outer folds; the folds' selections" +
-            (restricted ? " restricted to the effects earning their own part" : "") + " gain " +
-            Num(r.nested.gain) + " held out" +
-            (simulated ? ", " + Num(joint_gain) + " simulated, removing " +
-                             Num(sel_pct[0]) + " % of the calibrated base's gap" +
-                             need(sel_need[0]) + " and " + Num(sel_pct[1]) +
-                             " % of its part in the metrics they move" + need(sel_need[1])
-                       : std::string()) +
-            (std::isnan(w.pct[0])
-                 ? std::string()
-                 : "; left out of them, an outer fold's calibrated gap comes back by " +
-                       Num(w.pct[0]) + " % on average" + need(own_need[0]) +
-                       ", its part in the metrics it moves by " + Num(w.pct[1]) + " %" +
-                       need(own_need[1])) +
-            ")");
+        if (kept.empty() || kept == together || pass == 2) {
+          for (const std::string& w : why)
+            if (!w.empty()) r.dropped.push_back(w);
+          break;
+        }
+        together = kept;  // a strict part of the set read: read it again
       }
       keep_only(keep);
     }

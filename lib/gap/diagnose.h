@@ -204,8 +204,10 @@ struct Nested {
   // gain_simulated as a share of the calibrated Σz² in the metrics the selections move, over
   // every fold's held-out cells (MovedShare; NaN when not simulated).
   double share_moved = NAN;
-  // The same three with each fold's selection restricted to the effects the table keeps
-  // (RestrictNested; `kept` empty and the figures NaN where no restriction was needed).
+  // The same three with each fold's selection restricted to `kept`, the effects the keep rule
+  // read together last: those carrying their own part, brought to the set kept where that is
+  // smaller (RestrictNested; `kept` empty and the figures NaN where no restriction was
+  // needed).
   std::vector<std::string> kept;
   GapStat simulated_kept;
   double gain_simulated_kept = NAN, share_moved_kept = NAN;

@@ -236,6 +236,9 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
 bool RestrictNested(const Design& d, const Simulations& sims, const sim::SimParams& base,
                     const DiagnoseParams& params, const std::vector<int>& fold,
                     const GapModel& full, const std::vector<std::string>& keep, Nested* n) {
+  n->kept.clear();
+  n->simulated_kept = GapStat();
+  n->gain_simulated_kept = n->share_moved_kept = NAN;
   if (!n->run || std::isnan(n->gain_simulated)) return false;
   auto kept = [&](const std::string& e) {
     return std::find(keep.begin(), keep.end(), e) != keep.end();

@@ -19,8 +19,8 @@ Nested RunNested(const Design& design, const Simulations& sims, const sim::SimPa
 
 // Each fold's selection restricted to the effects in `keep` (at the fold's fitted values) and
 // simulated again on its held-out cells, where the restriction leaves out one of its effects:
-// sets n->kept, simulated_kept, gain_simulated_kept and share_moved_kept. False (n unchanged)
-// where no fold selected an effect outside `keep`, the folds were not simulated, or a
+// sets n->kept, simulated_kept, gain_simulated_kept and share_moved_kept. False (those four
+// cleared) where no fold selected an effect outside `keep`, the folds were not simulated, or a
 // simulation failed. `fold` and `full` as given to RunNested.
 bool RestrictNested(const Design& design, const Simulations& sims, const sim::SimParams& base,
                     const DiagnoseParams& params, const std::vector<int>& fold,

@@ -172,15 +172,13 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
   }
   w.Number("gain", n.gain).Number("gain_simulated", n.gain_simulated);
   w.Number("share_moved", n.share_moved);
-  // The folds' selections restricted to the effects earning their own part (null: none left
-  // out), on which the table's keep rule reads the selections' joint part.
+  // The folds' selections restricted as the keep rule read them last (null: none left out).
   if (n.kept.empty()) {
     w.Null("restricted");
   } else {
     w.BeginObject("restricted").BeginArray("effects");
     for (const std::string& e : n.kept) w.String(e);
-    w.EndArray();
-    GapJsonStat(w, "simulated", r, n.simulated_kept);
+    GapJsonStat(w.EndArray(), "simulated", r, n.simulated_kept);
     w.Number("gain_simulated", n.gain_simulated_kept).Number("share_moved", n.share_moved_kept);
     w.EndObject();
   }

@@ -1,0 +1,124 @@
+// Effects injected by their physics into real tables (lib/gap/cases.h, RealInjectionCases):
+// the map each row goes through, the cases' sizes from a table's own limits, and the article's
+// 128 rows with a disparity offset beyond and below its limit, diagnosed as the tool diagnoses
+// any table (the judge's reading against the table as it was: withheld_test.cpp, Criteria).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gap/cases.h"
+#include "gap/design.h"
+#include "gap/diagnose.h"
+#include "io/metrics_csv.h"
+#include "support/article.h"
+
+namespace depthbias::gap {
+namespace {
+
+sim::SimParams Base() { return test_support::ArticleSimParams(); }
+
+// Effects injected into a real table's rows by their physics (InjectIntoRealTable): each row's
+// depths through the effect's map, hand-computed at 16 m with f·B = 60 px·m.
+TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
+  records::PanelMetrics m;
+  m.bag = "a";
+  m.light = "daylight";
+  m.distance_m = 16;
+  m.median_m = 16;
+  m.mean_m = 16.1;
+  m.plane_std_m = 0.1;
+  m.temporal_std_m = 0.05;
+  m.panel_width_m = 1.0;
+  m.normal_tilt_deg = 20;
+  m.valid_pct = 40;
+  records::PanelMetrics sunset = m;
+  sunset.light = "sunset";
+  WithheldCase c;
+  c.name = "offset";
+  c.injected = {{"disparity_offset", {{"delta_px", -0.5}}, "daylight"}};
+  const auto rows = InjectIntoRealTable({m, sunset}, c, 60);
+  ASSERT_EQ(rows.size(), 2u);
+  const double z = 60 / (60 / 16.0 - 0.5), r = z / 16;  // 18.46 m: a negative offset reads far
+  EXPECT_NEAR(rows[0].median_m, z, 1e-9);
+  EXPECT_NEAR(rows[0].mean_m - rows[0].median_m, 0.1 * r * r, 1e-9);
+  EXPECT_NEAR(rows[0].plane_std_m, 0.1 * r * r, 1e-12);
+  EXPECT_NEAR(rows[0].temporal_std_m, 0.05 * r * r, 1e-12);
+  EXPECT_NEAR(rows[0].panel_width_m, r, 1e-12);
+  EXPECT_NEAR(std::tan(rows[0].normal_tilt_deg * M_PI / 180), std::tan(20 * M_PI / 180) * r,
+              1e-9);
+  EXPECT_EQ(rows[0].valid_pct, 40);
+  EXPECT_EQ(rows[0].distance_m, 16) << "the nominal distance is the campaign's";
+  EXPECT_EQ(rows[1].median_m, 16) << "the other light is left alone";
+  c.injected = {{"depth_scale", {{"scale_rel", 0.1}}, ""}};
+  const auto scaled = InjectIntoRealTable({m}, c, 60);
+  EXPECT_NEAR(scaled[0].median_m, 17.6, 1e-9);
+  EXPECT_NEAR(scaled[0].mean_m, 17.71, 1e-9);
+  EXPECT_NEAR(scaled[0].plane_std_m, 0.11, 1e-12);
+  EXPECT_NEAR(scaled[0].normal_tilt_deg, 20, 1e-9);
+  c.injected = {{"disparity_offset", {{"delta_px", -4}}, ""}};  // 3.75 px at 16 m
+  EXPECT_THROW(InjectIntoRealTable({m}, c, 60), std::invalid_argument);
+  c.injected = {{"panel_tilt", {{"yaw_deg", 10}}, ""}};
+  EXPECT_THROW(InjectIntoRealTable({m}, c, 60), std::invalid_argument);
+  // The cases' sizes: 1.5 and 0.5 times the table's limit on the over-reading side; an effect
+  // with no limit inside its grid that way is left out.
+  DetectionLimits limits;
+  DetectionLimit offset;
+  offset.effect = "disparity_offset";
+  offset.param = "delta_px";
+  offset.neutral = 0;
+  offset.size = {-0.653, 0.764};
+  offset.far_m = {2.93, -1.7};
+  DetectionLimit scale = offset;
+  scale.effect = "depth_scale";
+  scale.param = "scale_rel";
+  scale.size = {-0.08, NAN};
+  scale.far_m = {-1.2, 1.8};
+  limits.effects = {offset, scale};
+  const std::vector<WithheldCase> cases = RealInjectionCases(limits, "t");
+  ASSERT_EQ(cases.size(), 2u);
+  EXPECT_EQ(cases[0].name, "t + disparity_offset (1.5 × its limit)");
+  EXPECT_NEAR(cases[0].injected[0].params.at("delta_px"), -0.98, 1e-12);
+  EXPECT_FALSE(cases[0].may_go_unseen);
+  EXPECT_NEAR(cases[1].injected[0].params.at("delta_px"), -0.327, 1e-12);
+  EXPECT_TRUE(cases[1].may_go_unseen && cases[1].on_real);
+  EXPECT_TRUE(IsRealInjectionCase(cases[1].name));
+  EXPECT_FALSE(IsRealInjectionCase("disparity_offset large"));
+}
+
+// The article's 128 real rows with a disparity offset injected by its physics (lib/gap/cases.h,
+// RealInjectionCases): the camera's own departures, placements and outliers are the table's
+// background, which no simulator of ours made. At 1.5 times the over-reading limit the
+// article's report gives (−0.98 px, 4.9 m far at 16 m) it must be kept, alone, at its size; at
+// half of it (−0.33 px) it may go unseen only where the limit published says so. While the
+// folds' selections had to earn together whatever the table kept, the −0.98 px offset was
+// dropped: three folds of four selected it (its own part 20 % of their gap), and the fold
+// holding 12 m out an edge mixing that lost 326 of its 769 simulated Σz², so the selections
+// together removed 9.2 % of the calibrated gap (10 % needed).
+TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
+  std::vector<records::PanelMetrics> rows =
+      io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
+  const sim::SimParams base = Base();
+  ScreenRows(DesignRulesOf(base.sensor), &rows);
+  DiagnoseParams params;
+  params.simulate.threads = 2;
+  const std::vector<CaseOutcome> outcomes = RunRealInjectionCases(
+      base, rows, "article", params,
+      {"article + disparity_offset (1.5 × its limit)", "article + disparity_offset (0.5 × its limit)"});
+  ASSERT_EQ(outcomes.size(), 2u);
+  for (const CaseOutcome& o : outcomes) {
+    std::string recovered;
+    for (const auto& [effect, size] : o.recovered) recovered += effect + ": " + size + "; ";
+    EXPECT_TRUE(o.pass) << o.truth.name << ": " << o.why << "\n" << recovered;
+    if (!o.truth.may_go_unseen) {
+      EXPECT_EQ(o.selected, std::vector<std::string>{"disparity_offset"}) << recovered;
+    }
+    std::printf("%s: %s\n", o.truth.name.c_str(), recovered.c_str());
+  }
+}
+
+}  // namespace
+}  // namespace depthbias::gap
