@@ -92,12 +92,14 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
 // The article's 128 real rows with a disparity offset injected by its physics (lib/gap/cases.h,
 // RealInjectionCases): the camera's own departures, placements and outliers are the table's
 // background, which no simulator of ours made. At 1.5 times the over-reading limit the
-// article's report gives (−0.98 px, 4.9 m far at 16 m) it must be kept, alone, at its size; at
-// half of it (−0.33 px) it may go unseen only where the limit published says so. While the
-// folds' selections had to earn together whatever the table kept, the −0.98 px offset was
-// dropped: three folds of four selected it (its own part 20 % of their gap), and the fold
+// article's report gives (−0.979 px at seed 1, 4.9 m far at 16 m) it must be kept, alone, at
+// its size; at half of it (−0.326 px) it may go unseen only where the limit published says so.
+// While the folds' selections had to earn together whatever the table kept, the offset was
+// dropped here: three folds of four selected it (its own part 20 % of their gap), and the fold
 // holding 12 m out an edge mixing that lost 326 of its 769 simulated Σz², so the selections
-// together removed 9.2 % of the calibrated gap (10 % needed).
+// together removed 9.2 % of the calibrated gap (10 % needed). A guard of that rule at seed 1,
+// not of the capability at every seed: at seeds 3–5 the outer folds split between the offset
+// and a depth scale and nothing is kept (docs/gap/cases.md).
 TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   std::vector<records::PanelMetrics> rows =
       io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
