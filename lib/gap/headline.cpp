@@ -23,6 +23,7 @@ int MedianIndex(const DiagnoseResult& r) {
 // Why two effects are named "one of": their signatures' correlation, or (NaN) the first no
 // longer earning its parameters beside the second.
 std::string Why(const Ambiguity& a) {
+  if (!a.why.empty()) return a.why;
   if (std::isfinite(a.correlation)) return "r = " + Num(a.correlation);
   return "by BIC, " + a.effects[0] + " no longer earns beside " + a.effects.back();
 }

@@ -174,15 +174,14 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
   w.Number("share_moved", n.share_moved);
   // The folds' selections restricted as the keep rule read them last (null: none left out).
   if (n.kept.empty()) {
-    w.Null("restricted");
-  } else {
-    w.BeginObject("restricted").BeginArray("effects");
-    for (const std::string& e : n.kept) w.String(e);
-    GapJsonStat(w.EndArray(), "simulated", r, n.simulated_kept);
-    w.Number("gain_simulated", n.gain_simulated_kept).Number("share_moved", n.share_moved_kept);
-    w.EndObject();
+    w.Null("restricted").EndObject();
+    return;
   }
-  w.EndObject();
+  w.BeginObject("restricted").BeginArray("effects");
+  for (const std::string& e : n.kept) w.String(e);
+  GapJsonStat(w.EndArray(), "simulated", r, n.simulated_kept);
+  w.Number("gain_simulated", n.gain_simulated_kept).Number("share_moved", n.share_moved_kept);
+  w.EndObject().EndObject();
 }
 
 void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
@@ -192,10 +191,10 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
     for (const auto& e : a.effects) w.String(e);
     w.EndArray().BeginArray("sizes");
     for (const auto& s : a.sizes) w.String(s);
-    w.EndArray().Number("correlation", a.correlation).EndObject();
+    w.EndArray().Number("correlation", a.correlation);
+    (a.why.empty() ? w : w.String("why", a.why)).EndObject();
   }
-  w.EndArray();
-  w.BeginArray("not_kept");
+  w.EndArray().BeginArray("not_kept");
   for (const auto& d : r.dropped) w.String(d);
   w.EndArray();
   w.BeginArray("unexplained");
