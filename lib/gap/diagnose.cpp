@@ -158,6 +158,18 @@ std::vector<std::vector<SizeSpread>> SpreadOverFolds(const GapModel& model,
   return out;
 }
 
+// An effect's own part in an outer fold (the j-th of its selection): the share of the fold's
+// calibrated Σz² that comes back when it is left out [0], and that share in the metrics it moves
+// [1] (NaN: its change moved nothing there). False where the fold was not simulated.
+bool OwnPart(const NestedFold& f, size_t j, double part[2]) {
+  if (!f.simulated || !(f.simulated_calibrated_sq > 0) || j >= f.effect_gain_simulated.size() ||
+      j >= f.effect_share_moved.size())
+    return false;
+  part[0] = f.effect_gain_simulated[j] / f.simulated_calibrated_sq;
+  part[1] = f.effect_share_moved[j];
+  return true;
+}
+
 }  // namespace
 
 DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
@@ -276,15 +288,13 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           ++folds;
           if (at == f.selected.end()) continue;
           ++w.count;
-          const size_t j = static_cast<size_t>(at - f.selected.begin());
-          if (!f.simulated || !(f.simulated_calibrated_sq > 0) ||
-              j >= f.effect_gain_simulated.size() || j >= f.effect_share_moved.size()) {
+          double part[2];
+          if (!OwnPart(f, static_cast<size_t>(at - f.selected.begin()), part)) {
             w.known = false;
             continue;
           }
-          sum[0] += f.effect_gain_simulated[j] / f.simulated_calibrated_sq;
-          // NaN: its change moved nothing there.
-          if (std::isfinite(f.effect_share_moved[j])) sum[1] += f.effect_share_moved[j];
+          sum[0] += part[0];
+          if (std::isfinite(part[1])) sum[1] += part[1];
         }
         bool enough = false;
         for (int m = 0; m < 2; ++m) {
@@ -436,9 +446,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         for (size_t j = 0; j < f.selected.size(); ++j) {
           if (f.selected[j] != c.a && f.selected[j] != c.b) continue;
           (f.selected[j] == c.a ? with_a : with_b) += 1;
-          if (j >= f.effect_gain_simulated.size() || !(f.simulated_calibrated_sq > 0)) continue;
-          const double part[2] = {f.effect_gain_simulated[j] / f.simulated_calibrated_sq,
-                                  j < f.effect_share_moved.size() ? f.effect_share_moved[j] : NAN};
+          double part[2];
+          if (!OwnPart(f, j, part)) continue;
           for (int m = 0; m < 2; ++m)
             if (std::isfinite(part[m]) && !(part[m] <= best[m])) best[m] = part[m];
         }
