@@ -622,8 +622,8 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
 }
 
 // The article's 128 real rows. Their held-out gap sits in the emitter's valid_pct and the 4 m
-// plane_std, not in the range. Read as a share of that whole gap alone, no depth scale within
-// the simulated grid (up to +12 %, 1.8 m far at 16 m) would be kept: the keep rule judged a range
+// plane_std, not in the range. Read as a share of that whole gap alone, no depth scale up to
+// +12 % (1.8 m far at 16 m, then the grid's edge) would be kept: the keep rule judged a range
 // law against metrics it cannot move. Read in the metrics it moves too, a depth scale that
 // over-reads is kept from +9.3 % (1.4 m at 16 m) and an offset from −0.555 px (2.4 m), measured
 // with the diagnosis's defaults; whole-gap reading alone: −0.713 px (3.3 m).
