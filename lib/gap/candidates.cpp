@@ -28,8 +28,9 @@ std::vector<Candidate> MakeCandidates() {
   // +10.7 %, and a scale of 1.5 times that (+16 %) injected into them lay beyond a grid that
   // ended at ±12 %, where it was kept at the edge (0.12) or taken by an offset of −0.74 px.
   c.push_back({"depth_scale",
-               {Continuous("scale_rel", {-0.2, -0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12, 0.2},
-                           0, 0.02)}});
+               {Continuous("scale_rel",
+                           {-0.2, -0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12, 0.2}, 0,
+                           0.02)}});
   c.push_back({"range_vs_depth", {Continuous("weight", {0, 0.15, 0.4, 0.7, 1.0}, 0, 0.5)}});
   for (Candidate& law : c) law.range_law = true;  // the three above
   // Nodes at ±1 px: between 0.6 and 1.5 px the interpolation crossed a change of regime. The

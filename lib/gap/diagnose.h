@@ -227,7 +227,8 @@ struct Ambiguity {
   std::vector<std::string> effects;  // "one of {a, b}"; "calibration:sigma_d" for σ_d
   std::vector<std::string> sizes;    // the size each would need, as text
   double correlation = 0;
-  std::string why;                   // "" or what tells they are one of: the outer folds' split
+  std::string why;  // "" or what tells they are one of: the outer folds' split between them, or
+                    // a rival they choose at least as often as the effect the table selected
 };
 
 // The rest of the gap no registered effect earns (open world).

@@ -297,4 +297,13 @@ bool RestrictNested(const Design& d, const Simulations& sims, const sim::SimPara
   return true;
 }
 
+bool OwnPart(const NestedFold& f, size_t j, double part[2]) {
+  if (!f.simulated || !(f.simulated_calibrated_sq > 0) || j >= f.effect_gain_simulated.size() ||
+      j >= f.effect_share_moved.size())
+    return false;
+  part[0] = f.effect_gain_simulated[j] / f.simulated_calibrated_sq;
+  part[1] = f.effect_share_moved[j];
+  return true;
+}
+
 }  // namespace depthbias::gap

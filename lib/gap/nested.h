@@ -26,6 +26,11 @@ bool RestrictNested(const Design& design, const Simulations& sims, const sim::Si
                     const DiagnoseParams& params, const std::vector<int>& fold,
                     const GapModel& full, const std::vector<std::string>& keep, Nested* n);
 
+// An effect's own part in an outer fold (the j-th of its selection): the share of the fold's
+// calibrated Σz² that comes back when it is left out [0], and that share in the metrics it moves
+// [1] (NaN: its change moved nothing there). False where the fold was not simulated.
+bool OwnPart(const NestedFold& f, size_t j, double part[2]);
+
 // The cells of `design` marked in `cells`, scenarios and metrics kept.
 Design Subset(const Design& design, const std::vector<char>& cells);
 

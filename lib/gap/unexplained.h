@@ -25,8 +25,8 @@ struct RestParams {
 
 // The rest of the gap after a model (mu: its prediction of every observation). For each metric
 // whose Σz² is significant (χ²), the group of cells (a level of a factor or of a pair of
-// factors, holding several test points) whose mean departure carries the most of the metric's
-// Σz² for its size is described when it is beyond chance: its score is compared with the best
+// factors, holding several test points) whose mean departure explains the largest share of the
+// metric's Σz² is described when it is beyond chance: its score is compared with the best
 // score of tables whose test points were permuted as wholes (each recording to the same preset
 // and emitter slot of another test point), so that heavy-tailed, skewed or bounded residuals
 // and the placement a test point's recordings share are the reference, not a normal law.
