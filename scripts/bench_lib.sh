@@ -1,7 +1,11 @@
 # Helpers of the bench_*.sh scripts (sourced, after set -euo pipefail and their ERR trap).
 # Under set -e a command failing inside $(...) ends the script only when the $(...) is assigned;
 # given as an argument (echo "$(...)", printf ... "$(...)") its failure is lost and an empty or
-# wrong figure printed. So every figure is assigned first, then printed.
+# wrong figure printed. So every figure is assigned first, then printed. And a $(...) runs
+# without set -e unless inherit_errexit is on: a failing command before the last one of a
+# function called as $(f) (bench_machine's nproc or /proc/loadavg) would go on and print a
+# figure with a hole in it; with it, the assignment fails and the caller's ERR trap names it.
+shopt -s inherit_errexit
 
 best() { sort -g | head -1; }
 
