@@ -138,8 +138,10 @@ struct CaseOutcome {
 // by the diagnosis's own answer, absent there: the injected size is the truth. The shrink is
 // the share of the injected part of the nested held-out gap that the selection, simulated,
 // removes beyond what the reference's removes: 100 · ((B − S) − (B₀ − S₀)) / (B − B₀), B and S
-// the nested baseline and simulated gaps, each table in its own noise units (its twins, which
-// the injection scales too: an approximate reading). A may_go_unseen case also passes when
+// the nested baseline and simulated gaps over the cells both hold out, all in the injected
+// table's units: the reference's z brought over cell by cell by the ratio of the outer folds'
+// units (gap.json's cells[].nested), since an injection that widens the twins' noise and the
+// placement scatter moves the unit too. A may_go_unseen case also passes when
 // nothing beyond the reference's selection is selected and the limit the injected table's
 // gap.json publishes (the report a user reads) in the injected direction reaches the injected
 // size.

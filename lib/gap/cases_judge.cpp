@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -261,13 +262,57 @@ bool Selected(const Json& root, const std::string& effect) {
   return FittedParams(root, effect) != nullptr;
 }
 
-// how_far.nested.<key>.overall, NaN where absent.
-double NestedGap(const Json& root, const char* key) {
-  const Json* how = root.Find("how_far");
-  const Json* nested = how ? how->Find("nested") : nullptr;
-  const Json* gap = nested ? nested->Find(key) : nullptr;
-  const Json* overall = gap ? gap->Find("overall") : nullptr;
-  return overall && overall->type == Json::kNumber ? overall->number : NAN;
+// The nested held-out gaps, mean z² over the cells both tables hold out: the injected table's
+// baseline and simulated (g[0], g[1]) and the reference's (g[2], g[3]), all in the injected
+// table's units. Each cell's z is in the unit of the outer fold that held it out; the
+// reference's is brought over by the ratio of the two folds' units (an injected offset widens
+// the noise and the placement scatter by (Z'/Z)², so the two tables' own units differ). Cells
+// are matched by their bag. False where either table publishes no nested cells, a bag is not
+// one cell's, no cell is common, or a held-out cell has no simulated z (a fold not simulated:
+// the published simulated gap is null then).
+bool NestedGapsInOneUnit(const Json& root, const Json& reference, double g[4]) {
+  const Json* cells = root.Find("cells");
+  const Json* ref_cells = reference.Find("cells");
+  if (!cells || !ref_cells) return false;
+  std::map<std::string, const Json*> ref;  // bag → the reference's nested block
+  for (const Json& r : ref_cells->items) {
+    const Json* bag = r.Find("bag");
+    if (!bag || !ref.emplace(bag->text, r.Find("nested")).second) return false;
+  }
+  auto get = [](const Json* block, const char* key, const std::string& metric) {
+    const Json* o = block->Find(key);
+    const Json* v = o ? o->Find(metric) : nullptr;
+    return v && v->type == Json::kNumber ? v->number : NAN;
+  };
+  // Whether a held-out observation lacks its simulated z.
+  auto unsimulated = [&](const Json* block, const std::string& metric) {
+    return std::isfinite(get(block, "z_baseline", metric)) &&
+           !std::isfinite(get(block, "z_simulated", metric));
+  };
+  double sum[4] = {0, 0, 0, 0};
+  int n = 0;
+  std::set<std::string> seen;
+  for (const Json& c : cells->items) {
+    const Json* bag = c.Find("bag");
+    if (!bag || !seen.insert(bag->text).second) return false;
+    const Json* nested = c.Find("nested");
+    const auto at = ref.find(bag->text);
+    const Json* nested0 = at == ref.end() ? nullptr : at->second;
+    const Json* units = nested ? nested->Find("unit") : nullptr;
+    if (!nested0 || !units) continue;
+    for (const auto& [metric, u] : units->members) {
+      if (unsimulated(nested, metric) || unsimulated(nested0, metric)) return false;
+      const double ratio = get(nested0, "unit", metric) / u.number;
+      const double z[4] = {get(nested, "z_baseline", metric), get(nested, "z_simulated", metric),
+                           get(nested0, "z_baseline", metric) * ratio,
+                           get(nested0, "z_simulated", metric) * ratio};
+      if (!std::all_of(z, z + 4, [](double v) { return std::isfinite(v); })) continue;
+      for (int i = 0; i < 4; ++i) sum[i] += z[i] * z[i];
+      ++n;
+    }
+  }
+  for (int i = 0; i < 4; ++i) g[i] = n ? sum[i] / n : NAN;
+  return n > 0;
 }
 
 // Whether the limit gap.json publishes for the effect's parameter, in the direction of `value`
@@ -467,16 +512,16 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
       published = true;
       if (s->type == Json::kNumber) o.shrink_simulated_pct = s->number;
     }
+  bool one_unit = true;
   if (on_reference) {  // the injected part of the nested gap, and what the selection removes
-    const double b = NestedGap(root, "baseline"), b0 = NestedGap(reference, "baseline");
-    const double part = b - b0;
-    o.shrink_simulated_pct =
-        part > 0 ? 100 * ((b - NestedGap(root, "simulated")) -
-                          (b0 - NestedGap(reference, "simulated"))) / part
-                 : NAN;
+    double g[4];  // B, S, B₀, S₀
+    one_unit = NestedGapsInOneUnit(root, reference, g);
+    const double part = one_unit ? g[0] - g[2] : NAN;
+    o.shrink_simulated_pct = part > 0 ? 100 * ((g[0] - g[1]) - (g[2] - g[3])) / part : NAN;
   }
   if (!truth.injected.empty()) {
     if (!published) fail("no how_far.shrink_simulated_pct");
+    else if (!one_unit) fail("the two tables' held-out cells are not read in one unit");
     else if (!std::isfinite(o.shrink_simulated_pct)) fail("no held-out gap beyond noise to shrink");
     else if (o.shrink_simulated_pct < 70) fail("simulated shrink below 70 %");
   }

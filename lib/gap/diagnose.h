@@ -191,6 +191,7 @@ struct Nested {
   std::vector<char> cells;             // held out in some fold
   std::vector<double> z_baseline, z_calibrated, z_selected, z_simulated;  // [obs], fold units
   std::vector<double> z_simulated_calibrated;  // the fold's calibrated base simulated [obs]
+  std::vector<double> unit;            // [obs] the unit of z in the fold holding it out
   GapStat baseline, calibrated, selected, simulated, simulated_calibrated;
   // Shares of the held-out gap beyond the noise removed (Shrink in select.h), NaN when the
   // baseline leaves no excess.

@@ -159,6 +159,31 @@ std::string LimitsMarkdown(const DiagnoseResult& r) {
 
 }  // namespace
 
+std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
+                       bool hide_edges) {
+  const Candidate& c = r.candidates[t.term.candidate];
+  auto one = [&](int g) {
+    std::string s;
+    for (size_t a = 0; a < c.axes.size(); ++a) {
+      if (hide_edges && t.at_bound[g][a]) {
+        s += (s.empty() ? "" : ", ") + c.axes[a].param + " at the grid's edge (not determined)";
+        continue;
+      }
+      s += (s.empty() ? "" : ", ") + c.axes[a].param + " " + Num(t.values[g][a]);
+      if (with_ci && !c.axes[a].discrete && std::isfinite(t.ci_lo[g][a]))
+        s += " [" + Num(t.ci_lo[g][a]) + ", " + Num(t.ci_hi[g][a]) + "]";
+      if (t.at_bound[g][a]) s += " (grid edge)";
+    }
+    return s;
+  };
+  if (t.term.scope == Scope::kShared) return one(0);
+  std::string s;
+  for (size_t g = 0; g < t.values.size(); ++g)
+    s += (s.empty() ? "" : "; ") + ScopeGroupName(r.design, t.term.scope, static_cast<int>(g)) +
+         ": " + one(static_cast<int>(g));
+  return s;
+}
+
 std::string Headline(const DiagnoseResult& r) {
   std::ostringstream o;
   const int km = MedianIndex(r);

@@ -173,7 +173,7 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
   const size_t obs = d.real.size();
   n.cells.assign(d.num_cells(), 0);
   for (auto* z : {&n.z_baseline, &n.z_calibrated, &n.z_selected, &n.z_simulated,
-                  &n.z_simulated_calibrated})
+                  &n.z_simulated_calibrated, &n.unit})
     z->assign(obs, NAN);
   // The folds side by side, as many at once as the simulation may use threads.
   std::vector<FoldRun> runs(num_folds);
@@ -209,6 +209,7 @@ Nested RunNested(const Design& d, const Simulations& sims, const sim::SimParams&
         n.z_selected[o] = run.z1[o];
         n.z_simulated[o] = run.zs[o];
         n.z_simulated_calibrated[o] = run.zsc[o];
+        n.unit[o] = run.fold.unit[o];
       }
     }
     n.folds.push_back(std::move(run.fold));

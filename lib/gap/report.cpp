@@ -214,31 +214,6 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
 
 }  // namespace
 
-std::string text::ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
-                             bool hide_edges) {
-  const Candidate& c = r.candidates[t.term.candidate];
-  auto one = [&](int g) {
-    std::string s;
-    for (size_t a = 0; a < c.axes.size(); ++a) {
-      if (hide_edges && t.at_bound[g][a]) {
-        s += (s.empty() ? "" : ", ") + c.axes[a].param + " at the grid's edge (not determined)";
-        continue;
-      }
-      s += (s.empty() ? "" : ", ") + c.axes[a].param + " " + Num(t.values[g][a]);
-      if (with_ci && !c.axes[a].discrete && std::isfinite(t.ci_lo[g][a]))
-        s += " [" + Num(t.ci_lo[g][a]) + ", " + Num(t.ci_hi[g][a]) + "]";
-      if (t.at_bound[g][a]) s += " (grid edge)";
-    }
-    return s;
-  };
-  if (t.term.scope == Scope::kShared) return one(0);
-  std::string s;
-  for (size_t g = 0; g < t.values.size(); ++g)
-    s += (s.empty() ? "" : "; ") + ScopeGroupName(r.design, t.term.scope, static_cast<int>(g)) +
-         ": " + one(static_cast<int>(g));
-  return s;
-}
-
 std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const ReportContext& ctx) {
   JsonWriter w;
   w.BeginObject();
@@ -424,11 +399,19 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
         w.Number(r.metric_names[k], v.empty() ? NAN : v[static_cast<size_t>(c) * kk + k]);
       w.EndObject();
     };
-    row("real", r.design.real);
-    row("sim", r.sim_base);
-    row("z_baseline", r.z_base);
-    row("z_selected", r.z_selected);
-    row("z_heldout", r.z_selected_heldout);
+    for (const auto& [key, v] : {std::make_pair("real", &r.design.real),
+                                 {"sim", &r.sim_base}, {"z_baseline", &r.z_base},
+                                 {"z_selected", &r.z_selected},
+                                 {"z_heldout", &r.z_selected_heldout}})
+      row(key, *v);
+    if (r.nested.run) {  // the outer fold holding the cell out: its z and their unit
+      w.BeginObject("nested");
+      for (const auto& [key, v] : {std::make_pair("unit", &r.nested.unit),
+                                   {"z_baseline", &r.nested.z_baseline},
+                                   {"z_simulated", &r.nested.z_simulated}})
+        row(key, *v);
+      w.EndObject();
+    }
     w.Bool("significant_baseline", sig_base[c]).Bool("significant_after", sig_left[c]);
     w.EndObject();
   }

@@ -13,7 +13,9 @@
 #include <cstdint>
 #include <cstdlib>
 #include <initializer_list>
+#include <iomanip>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -52,12 +54,44 @@ WithheldCase Offset(const std::string& only_light = "") {
   return c;
 }
 
-// A gap.json as the diagnosis writes it, with the given selection and how_far.
+// A gap.json as the diagnosis writes it, with the given selection and how_far (and cells).
 std::string Json(const std::string& selected, const std::string& how_far,
-                 const std::string& unexplained = "") {
+                 const std::string& unexplained = "", const std::string& cells = "") {
   return "{\n  \"tool\": \"diagnose_gap\",\n  \"selected\": [" + selected +
          "],\n  \"how_far\": {" + how_far + "}" +
-         (unexplained.empty() ? "" : ",\n  \"unexplained\": " + unexplained) + "\n}\n";
+         (unexplained.empty() ? "" : ",\n  \"unexplained\": " + unexplained) +
+         (cells.empty() ? "" : ",\n  \"cells\": " + cells) + "\n}\n";
+}
+
+// One row of gap.json's cells: its bag, and in the outer fold holding it out the unit of
+// median_bias_m and its baseline and simulated z there (NaN: null).
+struct NestedRow {
+  std::string bag;
+  double unit, z_baseline, z_simulated;
+};
+
+std::string NestedCells(const std::vector<NestedRow>& rows) {
+  auto num = [](double v) {
+    if (!std::isfinite(v)) return std::string("null");
+    std::ostringstream o;
+    o << std::setprecision(17) << v;
+    return o.str();
+  };
+  std::string s = "[";
+  for (const NestedRow& r : rows)
+    s += (s.size() > 1 ? ", " : "") + std::string("{\"bag\": \"") + r.bag +
+         "\", \"nested\": {\"unit\": {\"median_bias_m\": " + num(r.unit) +
+         "}, \"z_baseline\": {\"median_bias_m\": " + num(r.z_baseline) +
+         "}, \"z_simulated\": {\"median_bias_m\": " + num(r.z_simulated) + "}}}";
+  return s + "]";
+}
+
+// Every row of Rows() alike, so that the nested gaps are `baseline` and `simulated`.
+std::string NestedCells(double baseline, double simulated, double unit) {
+  std::vector<NestedRow> rows;
+  for (const records::PanelMetrics& r : Rows())
+    rows.push_back({r.bag, unit, std::sqrt(baseline), std::sqrt(simulated)});
+  return NestedCells(rows);
 }
 
 TEST(Criteria, TheRightAnswerPasses) {
@@ -121,43 +155,46 @@ TEST(Criteria, EachWrongAnswerFails) {
 TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   WithheldCase c = Offset();
   c.on_real = true;
-  auto how_far = [](double baseline, double simulated) {
-    return "\"shrink_simulated_pct\": -20, \"nested\": {\"baseline\": {\"overall\": " +
-           std::to_string(baseline) + "}, \"simulated\": {\"overall\": " +
-           std::to_string(simulated) + "}}";
+  // Both tables held out in the same units: the nested gaps as given.
+  auto table = [](const std::string& selected, double baseline, double simulated) {
+    return Json(selected,
+                "\"shrink_simulated_pct\": -20, \"nested\": {\"baseline\": {\"overall\": " +
+                    std::to_string(baseline) + "}, \"simulated\": {\"overall\": " +
+                    std::to_string(simulated) + "}}",
+                "", NestedCells(baseline, simulated, 1));
   };
   const std::string offset =
       "{\"name\": \"disparity_offset\", \"scope\": \"shared\", \"params\": {\"delta_px\": ";
-  const std::string reference = Json("", how_far(7, 8));
+  const std::string reference = table("", 7, 8);
   // 10 → 8.6 against 7 → 8: the injected part 3, of which 1.4 + 1 is removed (80 %).
-  CaseOutcome o = JudgeCase(Json(offset + "0.21}}", how_far(10, 8.6)), c, Rows(), reference);
+  CaseOutcome o = JudgeCase(table(offset + "0.21}}", 10, 8.6), c, Rows(), reference);
   EXPECT_TRUE(o.pass) << o.why;
   EXPECT_NEAR(o.shrink_simulated_pct, 80, 1e-6);
-  EXPECT_FALSE(JudgeCase(Json(offset + "0.21}}", how_far(10, 9.2)), c, Rows(), reference).pass)
+  EXPECT_FALSE(JudgeCase(table(offset + "0.21}}", 10, 9.2), c, Rows(), reference).pass)
       << "60 % of the injected part";
   // The real table's own offset of 0.1 px, selected there: 0.31 is 0.21 moved.
-  const std::string with_own = Json(offset + "0.1}}", how_far(7, 8));
-  EXPECT_TRUE(JudgeCase(Json(offset + "0.31}}", how_far(10, 8.6)), c, Rows(), with_own).pass);
-  EXPECT_FALSE(JudgeCase(Json(offset + "0.21}}", how_far(10, 8.6)), c, Rows(), with_own).pass);
+  const std::string with_own = table(offset + "0.1}}", 7, 8);
+  EXPECT_TRUE(JudgeCase(table(offset + "0.31}}", 10, 8.6), c, Rows(), with_own).pass);
+  EXPECT_FALSE(JudgeCase(table(offset + "0.21}}", 10, 8.6), c, Rows(), with_own).pass);
   // Below the limit: nothing selected passes only where the published limit reaches its size.
   c.may_go_unseen = true;
   auto limits = [&](double above) {
-    return Json("", how_far(7.5, 8)).insert(1, "\n  \"detection_limits\": {\"effects\": "
+    return table("", 7.5, 8).insert(1, "\n  \"detection_limits\": {\"effects\": "
         "[{\"effect\": \"disparity_offset\", \"param\": \"delta_px\", \"below\": "
         "{\"size\": -0.3}, \"above\": {\"size\": " + std::to_string(above) + "}}]},");
   };
   EXPECT_TRUE(JudgeCase(limits(0.25), c, Rows(), reference).pass) << "0.2 px within 0.25";
   EXPECT_FALSE(JudgeCase(limits(0.15), c, Rows(), reference).pass) << "0.2 px beyond 0.15";
-  EXPECT_TRUE(JudgeCase(Json(offset + "0.21}}", how_far(10, 8.6)), c, Rows(), reference).pass)
+  EXPECT_TRUE(JudgeCase(table(offset + "0.21}}", 10, 8.6), c, Rows(), reference).pass)
       << "found right below the limit";
   // What the real table's own diagnosis selects is the table's, not a wrong answer.
   c.may_go_unseen = false;
   const std::string tilt =
       "{\"name\": \"panel_tilt\", \"scope\": \"shared\", \"params\": {\"yaw_deg\": 3}}";
-  EXPECT_TRUE(JudgeCase(Json(offset + "0.21}}, " + tilt, how_far(10, 8.6)), c, Rows(),
-                        Json(tilt, how_far(7, 8)))
+  EXPECT_TRUE(JudgeCase(table(offset + "0.21}}, " + tilt, 10, 8.6), c, Rows(),
+                        table(tilt, 7, 8))
                   .pass);
-  EXPECT_FALSE(JudgeCase(Json(offset + "0.21}}, " + tilt, how_far(10, 8.6)), c, Rows(), reference)
+  EXPECT_FALSE(JudgeCase(table(offset + "0.21}}, " + tilt, 10, 8.6), c, Rows(), reference)
                    .pass)
       << "a tilt the real table does not hold";
   // A scale composes by product: 1.1 × 1.1 = 1.21.
@@ -167,11 +204,54 @@ TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   const std::string s0 =
       "{\"name\": \"depth_scale\", \"scope\": \"shared\", \"params\": {\"scale_rel\": ";
   const CaseOutcome product =
-      JudgeCase(Json(s0 + "0.21}}", how_far(10, 8.6)), scale, Rows(), Json(s0 + "0.1}}", how_far(7, 8)));
+      JudgeCase(table(s0 + "0.21}}", 10, 8.6), scale, Rows(), table(s0 + "0.1}}", 7, 8));
   EXPECT_TRUE(product.pass) << product.why;
   EXPECT_NEAR(product.max_rel_error, 0, 1e-9);
   // A case on a real table is judged against its reference, or not at all.
-  EXPECT_FALSE(JudgeCase(Json(offset + "0.21}}", how_far(10, 8.6)), c, Rows()).pass);
+  EXPECT_FALSE(JudgeCase(table(offset + "0.21}}", 10, 8.6), c, Rows()).pass);
+}
+
+// The injected part is read in one unit, the injected table's: each row's reference z is
+// brought over by the ratio of the two nested folds' units, rows matched by their bag.
+TEST(Criteria, OnARealTableBothGapsAreReadInOneUnit) {
+  WithheldCase c = Offset();
+  c.on_real = true;
+  const std::string offset = "{\"name\": \"disparity_offset\", \"scope\": \"shared\", "
+                             "\"params\": {\"delta_px\": 0.21}}";
+  auto table = [](const std::string& selected, double baseline, double simulated, double unit) {
+    return Json(selected, "\"shrink_simulated_pct\": 50", "",
+                NestedCells(baseline, simulated, unit));
+  };
+  // The reference's z² 8 → 4 in its unit 1 are 2 → 1 in the injected table's unit 2; the
+  // injected table 10 → 8.6: a part of 8, of which 1.4 − 1 is removed (5 %). Read each in its
+  // own unit, it would be (1.4 − 4) / (10 − 8), below zero.
+  CaseOutcome o = JudgeCase(table(offset, 10, 8.6, 2), c, Rows(), table("", 8, 4, 1));
+  EXPECT_NEAR(o.shrink_simulated_pct, 5, 1e-6);
+  EXPECT_FALSE(o.pass);
+  // The injection narrowing the unit to 0.5, the reference's 1 → 0.5 read 4 → 2 there; the
+  // injected table 10 → 3: a part of 6, of which 7 − 2 is removed (83 %).
+  o = JudgeCase(table(offset, 10, 3, 0.5), c, Rows(), table("", 1, 0.5, 1));
+  EXPECT_NEAR(o.shrink_simulated_pct, 100.0 * (7 - 2) / 6, 1e-6);
+  EXPECT_TRUE(o.pass) << o.why;
+  // Each row's own ratio, not one for the table: r0's unit doubled by the injection, r1's not.
+  // The reference's z (2, 2) and (2, 1) read (1, 1) and (2, 1); the injected table's (3, 1)
+  // twice: B 9, S 1, B₀ 2.5, S₀ 1, a part of 6.5, all of it removed.
+  const std::string injected = Json(offset, "\"shrink_simulated_pct\": 50", "",
+                                    NestedCells({{"r0.bag", 2, 3, 1}, {"r1.bag", 1, 3, 1}}));
+  o = JudgeCase(injected, c, Rows(),
+                Json("", "", "", NestedCells({{"r0.bag", 1, 2, 2}, {"r1.bag", 1, 2, 1}})));
+  EXPECT_NEAR(o.shrink_simulated_pct, 100, 1e-9);
+  EXPECT_TRUE(o.pass) << o.why;
+  // A held-out row the simulation did not reach (its fold not simulated), a bag twice, or no
+  // row in common: the two are not read in one unit.
+  for (const std::string& reference :
+       {NestedCells({{"r0.bag", 1, 2, 2}, {"r1.bag", 1, 2, NAN}}),
+        NestedCells({{"r0.bag", 1, 2, 2}, {"r1.bag", 1, 2, 1}, {"r1.bag", 1, 2, 1}}),
+        NestedCells({{"x0.bag", 1, 2, 2}, {"x1.bag", 1, 2, 1}})}) {
+    o = JudgeCase(injected, c, Rows(), Json("", "", "", reference));
+    EXPECT_FALSE(std::isfinite(o.shrink_simulated_pct)) << reference;
+    EXPECT_NE(o.why.find("not read in one unit"), std::string::npos) << o.why;
+  }
 }
 
 // A gain on σ_d is the calibration's own direction where every scenario's σ_d is calibrated: it
