@@ -10,6 +10,7 @@
 #include "gap/report_util.h"
 #include "gap/select.h"
 #include "gap/unexplained.h"
+#include "gap/votes.h"
 
 namespace depthbias::gap {
 namespace {
@@ -267,78 +268,18 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       // whose emitter adds no texture holds 90 % of a user's unit's gap in valid_pct at 4 m,
       // where an offset of −0.25 px, 50–65 % of each other fold's gap, came to 6 % of the
       // pooled one).
-      struct Own {
-        int count = 0;
-        double pct[2] = {NAN, NAN};
-        bool known = true;
-        bool earns = false;  // selected in half the folds or more, and its own part is enough
-        std::string rival;   // a correlated effect the folds choose at least as often
-        int rival_count = 0;
-        double rival_r = 0;
-      };
-      // An effect's folds and own part, averaged over the folds (0 in a fold without it).
-      auto own_of = [&](const std::string& e) {
-        Own w;
-        double sum[2] = {0, 0};
-        for (const auto& f : r.nested.folds) {
-          const auto at = std::find(f.selected.begin(), f.selected.end(), e);
-          if (at == f.selected.end()) continue;
-          ++w.count;
-          double part[2];
-          if (!OwnPart(f, static_cast<size_t>(at - f.selected.begin()), part)) {
-            w.known = false;
-            continue;
-          }
-          sum[0] += part[0];
-          if (std::isfinite(part[1])) sum[1] += part[1];
-        }
-        const double folds = static_cast<double>(r.nested.folds.size());
-        bool enough = false;
-        for (int m = 0; m < 2; ++m) {
-          if (w.known && folds > 0) w.pct[m] = 100 * sum[m] / folds;
-          enough |= !w.known || w.count == 0 || w.pct[m] >= own_need[m];
-        }
-        w.earns = enough && 2 * w.count >= static_cast<int>(folds);
-        return w;
-      };
-      // Whether some fold chooses e without `without` and e carries its own part there.
-      auto alone_earns = [&](const std::string& e, const std::string& without) {
-        for (const NestedFold& f : r.nested.folds) {
-          const auto at = std::find(f.selected.begin(), f.selected.end(), e);
-          double part[2];
-          if (at == f.selected.end() || std::count(f.selected.begin(), f.selected.end(), without) ||
-              !OwnPart(f, static_cast<size_t>(at - f.selected.begin()), part))
-            continue;
-          if (100 * part[0] >= own_need[0] || 100 * part[1] >= own_need[1]) return true;
-        }
-        return false;
-      };
-      std::vector<Own> own(r.steps.size());
+      std::vector<FoldVote> own(r.steps.size());
       std::vector<std::string> own_earners;
       for (size_t i = 0; i < r.steps.size(); ++i) {
         const std::string& e = r.steps[i].effect;
-        Own& w = own[i] = own_of(e);
-        // A rival: an effect correlated with this one (|r| ≥ 0.5, as for the folds' split
-        // below) that the table does not select, that the folds choose at least as often, and
-        // that carries its own part in a fold choosing it without this one (not a rider). The
-        // held-out evidence then does not prefer the one selected here (on the article's rows
-        // an injected −0.95 px offset was kept as a +19.7 % scale, one fold choosing each alone,
-        // 24 % and 38 % of its gap, and one both). An effect that would be kept is then not,
-        // the others are read again without it, and the pair is named "one of".
-        for (const Confounded& c : sel.correlations) {
-          if (!w.earns) break;
-          const std::string other = c.a == e ? c.b : c.b == e ? c.a : "";
-          if (other.empty() || !(std::fabs(c.correlation) >= 0.5) ||
-              std::any_of(r.steps.begin(), r.steps.end(),
-                          [&](const SelectionStep& st) { return st.effect == other; }))
-            continue;
-          const Own x = own_of(other);
-          const bool better = x.count > w.rival_count ||
-                              (x.count == w.rival_count &&
-                               std::fabs(c.correlation) > std::fabs(w.rival_r));
-          if (x.count < w.count || !better || !alone_earns(other, e)) continue;
-          w.rival = other, w.rival_count = x.count, w.rival_r = c.correlation;
-        }
+        FoldVote& w = own[i] = VoteOf(r.nested, e, own_need);
+        // A rival (FindRival): the held-out evidence does not prefer the effect selected here
+        // (on the article's rows an injected −0.95 px offset was kept as a +19.7 % scale, one
+        // fold choosing each alone, 24 % and 38 % of its gap, and one both; at another seed the
+        // scale was selected and dropped, one fold choosing it, while three chose the offset).
+        // An effect that would be kept is then not, the others are read again without it, and
+        // the pair is named "one of".
+        FindRival(r.nested, sel.correlations, r.steps, e, own_need, &w);
         if (w.earns) own_earners.push_back(e);
       }
       // Then the effects that earn their own part, together: the folds' selections restricted
@@ -352,7 +293,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       // one reading and the joint part only by the other is dropped, and the others are read
       // again without it.
       std::vector<std::string> together = own_earners;
-      std::vector<char> contested(r.steps.size(), 0);  // would be kept but for a rival
+      std::vector<char> contested(r.steps.size(), 0);  // named "one of" with its rival
       const bool simulated = !std::isnan(r.nested.gain_simulated);
       for (int pass = 0;; ++pass) {
         if (!together.empty())
@@ -370,7 +311,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         std::vector<std::string> kept;
         std::vector<std::string> why(r.steps.size());
         for (size_t i = 0; i < r.steps.size(); ++i) {
-          const Own& w = own[i];
+          const FoldVote& w = own[i];
           // The guards read shares of the calibrated base's held-out Σz², noise included, not
           // of its excess over the noise (Shrink): on a table without effect the excess is
           // small, and a tenth of it is earned by chance (3 of 20 null tables at seed 1 kept an
@@ -395,8 +336,9 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           const bool held_out_earns =
               simulated ? joint_gain > 0 && (by[0] || by[1]) : r.nested.gain > 0;
           // Contested once read kept with its rival beside it, it stays so when the others are
-          // read again without it.
-          contested[i] |= held_out_earns && w.earns && !w.rival.empty();
+          // read again without it. One dropped for too few folds is contested by its rival
+          // whatever the selections earn together: that rival is not among them.
+          contested[i] |= !w.rival.empty() && (held_out_earns || !w.earns);
           keep[i] = held_out_earns && w.earns && w.rival.empty();
           if (keep[i]) {
             kept.push_back(r.steps[i].effect);
@@ -422,7 +364,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                          ", its part in the metrics it moves by " + Num(w.pct[1]) + " %" +
                          need(own_need[1])) +
               (w.rival.empty() ? std::string()
-                               : "; " + w.rival + " chosen at least as often, in " +
+                               : "; " + w.rival + " chosen " + (w.earns ? "at least as" : "more") +
+                                     " often, in " +
                                      std::to_string(w.rival_count) + ", r = " + Num(w.rival_r)) +
               ")";
         }
@@ -441,7 +384,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         Ambiguity rival{{read[i], own[i].rival}, {}, own[i].rival_r, ""};
         rival.sizes = sizes_of(rival.effects);
         if (rival.sizes.size() != 2) continue;
-        rival.why = "the outer folds choose " + own[i].rival + " at least as often: " +
+        rival.why = "the outer folds choose " + own[i].rival +
+                    (own[i].earns ? " at least as" : " more") + " often: " +
                     rival.effects[0] + " in " + std::to_string(own[i].count) + ", " +
                     own[i].rival + " in " + std::to_string(own[i].rival_count) + " of " +
                     std::to_string(r.nested.folds.size()) + ", r = " + Num(own[i].rival_r);
@@ -483,55 +427,14 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
     }
   }
 
-  // Named, not selected: two effects the outer folds split between. Neither is kept, every
-  // fold selects one of them, their signatures correlate, and whichever a fold selects carries
-  // its own part there (on average over the folds, by either reading of the keep rule): the
-  // table shows a law of that kind without telling which (the field campaign with a +3.6 %
-  // scale injected beside its own offset, at seed 1).
+  // Named, not selected: two effects the outer folds split between (FoldSplits): the table
+  // shows a law of that kind without telling which (the field campaign with a +3.6 % scale
+  // injected beside its own offset, at seed 1).
   if (params.nested && r.nested.run && !r.nested.folds.empty()) {
-    auto kept = [&](const std::string& e) {
-      return std::any_of(r.steps.begin(), r.steps.end(),
-                         [&](const SelectionStep& st) { return st.effect == e; });
-    };
-    auto named = [&](const std::string& a, const std::string& b) {
-      return std::any_of(r.ambiguous.begin(), r.ambiguous.end(), [&](const Ambiguity& m) {
-        return std::count(m.effects.begin(), m.effects.end(), a) &&
-               std::count(m.effects.begin(), m.effects.end(), b);
-      });
-    };
-    for (const Confounded& c : sel.correlations) {
-      if (!(std::fabs(c.correlation) >= 0.5) || kept(c.a) || kept(c.b) || named(c.a, c.b))
-        continue;
-      int with_a = 0, with_b = 0, covered = 0;
-      double own[2] = {0, 0};
-      for (const NestedFold& f : r.nested.folds) {
-        double best[2] = {NAN, NAN};
-        for (size_t j = 0; j < f.selected.size(); ++j) {
-          if (f.selected[j] != c.a && f.selected[j] != c.b) continue;
-          (f.selected[j] == c.a ? with_a : with_b) += 1;
-          double part[2];
-          if (!OwnPart(f, j, part)) continue;
-          for (int m = 0; m < 2; ++m)
-            if (std::isfinite(part[m]) && !(part[m] <= best[m])) best[m] = part[m];
-        }
-        if (std::isfinite(best[0]) || std::isfinite(best[1])) ++covered;
-        for (int m = 0; m < 2; ++m)
-          if (std::isfinite(best[m])) own[m] += best[m];
-      }
-      const double folds = static_cast<double>(r.nested.folds.size());
-      const double pct[2] = {100 * own[0] / folds, 100 * own[1] / folds};
-      if (with_a == 0 || with_b == 0 || covered < static_cast<int>(folds) ||
-          !(pct[0] >= params.min_own_shrink_pct || pct[1] >= params.min_own_moved_shrink_pct))
-        continue;
-      Ambiguity split{{c.a, c.b}, {}, c.correlation, ""};
-      split.sizes = sizes_of(split.effects);
-      if (split.sizes.size() != 2) continue;
-      split.why = "the outer folds split between them: " + c.a + " in " +
-                  std::to_string(with_a) + ", " + c.b + " in " + std::to_string(with_b) + " of " +
-                  std::to_string(r.nested.folds.size()) + ", r = " + Num(c.correlation) +
-                  ", their own part " + Num(pct[0]) + " % of each fold's gap on average";
-      r.ambiguous.push_back(split);
-    }
+    const double own_need[2] = {params.min_own_shrink_pct, params.min_own_moved_shrink_pct};
+    for (Ambiguity& split :
+         FoldSplits(r.nested, sel.correlations, r.steps, r.ambiguous, own_need, sizes_of))
+      r.ambiguous.push_back(std::move(split));
   }
 
   // How far, and what is left.

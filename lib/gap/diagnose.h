@@ -230,6 +230,7 @@ struct Ambiguity {
   double correlation = 0;
   std::string why;  // "" or what tells they are one of: the outer folds' split between them, or
                     // a rival they choose at least as often as the effect the table selected
+                    // (more often, where that effect is dropped for too few folds)
 };
 
 // The rest of the gap no registered effect earns (open world).

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gap/cases.h"
@@ -123,34 +124,42 @@ TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   }
 }
 
-// At seed 3 the same offset (−0.952 px there) is not kept: the whole table selects a depth
-// scale of +19.7 %, and the outer folds choose the offset as often as the scale (two each). The
-// report names the pair "one of", the folds' choices as its reason, instead of keeping either
-// law; with the scale's grid at ±12 % the folds split between the two and neither was kept,
-// and the pair was named for that split. The null tables of seeds 1–5 and 7 (120) name no such
-// pair (docs/gap/cases.md).
+// At seeds 2 and 3 the same offset (−0.95 px there) is not kept. At seed 3 the whole table
+// selects a depth scale of +19.7 %, and the outer folds choose the offset as often as the scale
+// (two each); at seed 2 it selects a scale that one fold chooses, beside the offset, and drops
+// it, while three folds choose the offset (alone in two, 25 % and 49 % of their gap). The report
+// names the pair "one of", the folds' choices as its reason, instead of keeping either law
+// (at seed 2 it named nothing before). With the scale's grid at ±12 % the folds split between
+// the two at seed 3 and neither was kept, and the pair was named for that split. The null
+// tables of seeds 1–5 and 7 (120) name no such pair (docs/gap/cases.md).
 TEST(Article, AnOffsetTheFoldsSplitWithAScaleIsNamedOneOfThem) {
   std::vector<records::PanelMetrics> rows =
       io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
   sim::SimParams base = Base();
-  base.seed = 3;
   ScreenRows(DesignRulesOf(base.sensor), &rows);
   DiagnoseParams params;
   params.simulate.threads = 2;
-  const std::vector<CaseOutcome> outcomes = RunRealInjectionCases(
-      base, rows, "article", params, {"article + disparity_offset (1.5 × its limit)"});
-  ASSERT_EQ(outcomes.size(), 1u);
-  const std::string& json = outcomes[0].gap_json;
-  EXPECT_TRUE(outcomes[0].selected.empty()) << "kept at seed 3 now: move this test's seed";
-  const size_t ambiguous = json.find("\"ambiguous\": [");
-  ASSERT_NE(ambiguous, std::string::npos);
-  const size_t why = json.find("\"why\": \"the outer folds choose ", ambiguous);
-  ASSERT_NE(why, std::string::npos) << json.substr(ambiguous, 600);
-  const size_t entry = json.rfind("\"one_of\": [", why);
-  ASSERT_NE(entry, std::string::npos);
-  const std::string one_of = json.substr(entry, why - entry);
-  EXPECT_NE(one_of.find("\"disparity_offset\""), std::string::npos) << one_of;
-  EXPECT_NE(one_of.find("\"depth_scale\""), std::string::npos) << one_of;
+  for (const auto& [seed, how_often] : {std::make_pair(3, "at least as often"),
+                                        std::make_pair(2, "more often")}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    base.seed = seed;
+    const std::vector<CaseOutcome> outcomes = RunRealInjectionCases(
+        base, rows, "article", params, {"article + disparity_offset (1.5 × its limit)"});
+    ASSERT_EQ(outcomes.size(), 1u);
+    const std::string& json = outcomes[0].gap_json;
+    EXPECT_TRUE(outcomes[0].selected.empty()) << "kept now: move this test's seed";
+    const size_t ambiguous = json.find("\"ambiguous\": [");
+    ASSERT_NE(ambiguous, std::string::npos);
+    const size_t why =
+        json.find(std::string("\"why\": \"the outer folds choose disparity_offset ") + how_often,
+                  ambiguous);
+    ASSERT_NE(why, std::string::npos) << json.substr(ambiguous, 600);
+    const size_t entry = json.rfind("\"one_of\": [", why);
+    ASSERT_NE(entry, std::string::npos);
+    const std::string one_of = json.substr(entry, why - entry);
+    EXPECT_NE(one_of.find("\"disparity_offset\""), std::string::npos) << one_of;
+    EXPECT_NE(one_of.find("\"depth_scale\""), std::string::npos) << one_of;
+  }
 }
 
 }  // namespace
