@@ -47,16 +47,15 @@ bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
 }
 
 // 1.4826 × the median of |disparity residual|·√n over the used pixels: σ_d of one sample.
-// disparity[k] = fb / mean_m[k], sqrt_weight[k] = √weight[k]; r is scratch.
-double ScatterPx(const std::vector<Eigen::Vector3d>& rays, const std::vector<double>& disparity,
+// disparity[k] = fb / mean_m[k], sqrt_weight[k] = √weight[k], zp[k] the plane's depth on the
+// pixel's ray (Plane::DepthOnRay); r is scratch.
+double ScatterPx(const std::vector<double>& zp, const std::vector<double>& disparity,
                  const std::vector<double>& sqrt_weight, const std::vector<std::uint8_t>& use,
-                 const Plane& plane, double fb, std::vector<double>& r) {
+                 double fb, std::vector<double>& r) {
   r.clear();
-  for (std::size_t k = 0; k < rays.size(); ++k) {
-    if (!use[k]) continue;
-    const double zp = plane.DepthOnRay(rays[k]);
-    if (!std::isfinite(zp)) continue;
-    r.push_back(std::fabs(disparity[k] - fb / zp) * sqrt_weight[k]);
+  for (std::size_t k = 0; k < zp.size(); ++k) {
+    if (!use[k] || !std::isfinite(zp[k])) continue;
+    r.push_back(std::fabs(disparity[k] - fb / zp[k]) * sqrt_weight[k]);
   }
   if (r.empty()) return 0.0;
   const std::size_t mid = r.size() / 2;
@@ -155,9 +154,15 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
   }
   // ClassifyMeanDepth, with those precomputed.
   const double k_sigma = p.sigma_k / (fb);
+  // The current plane's depth on each observed pixel's ray, computed once a plane.
+  std::vector<double> plane_z(n, NAN);
+  auto on_plane_depths = [&] {
+    for (std::size_t k = 0; k < n; ++k)
+      if (use[k]) plane_z[k] = out.plane.DepthOnRay(rays[k]);
+  };
   auto classify = [&](std::size_t k) {
     if (on_ground[k]) return PixelClass::kGround;
-    const double zp = out.plane.DepthOnRay(rays[k]);
+    const double zp = plane_z[k];
     if (!std::isfinite(zp)) return PixelClass::kBehind;
     const double limit =
         k_sigma * zp * zp * out.subpixel_rms_px * inv_sqrt_n[k] + p.plane_distance_m;
@@ -177,10 +182,11 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
   std::vector<std::uint8_t> on(n, 0), last;
   std::vector<double> scratch;
   scratch.reserve(n);
+  // plane_z stays that of out.plane wherever the loop ends: the classes below read it.
   for (int it = 0; out.plane_ok; ++it) {
-    out.subpixel_rms_px =
-        std::max(p.expected_subpixel_rms_px,
-                 ScatterPx(rays, disparity, sqrt_n, observed, out.plane, fb, scratch));
+    on_plane_depths();
+    out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px,
+                                   ScatterPx(plane_z, disparity, sqrt_n, observed, fb, scratch));
     if (it == p.refit_iterations) break;
     for (std::size_t k = 0; k < n; ++k)
       on[k] = observed[k] && classify(k) == PixelClass::kOnPlane;
