@@ -241,14 +241,19 @@ Truth TruthIn(const Injection& in, const std::string& scenario, const Axis& axis
 
 // A fitted parameter's value in a scenario ("light/preset") from an effect's params: one value,
 // or one per light or per scenario.
+// The number `key` holds in the object o, or NaN.
+double NumberAt(const Json& o, const std::string& key) {
+  const Json* v = o.Find(key);
+  return v && v->type == Json::kNumber ? v->number : NAN;
+}
+
 double ValueIn(const Json& params, const std::string& scenario, const std::string& param) {
   const bool grouped =
       !params.members.empty() && params.members.front().second.type == Json::kObject;
   const Json* group = !grouped                ? &params
                       : params.Find(scenario) ? params.Find(scenario)
                                               : params.Find(LightOf(scenario));
-  const Json* v = group ? group->Find(param) : nullptr;
-  return v && v->type == Json::kNumber ? v->number : NAN;
+  return group ? NumberAt(*group, param) : NAN;
 }
 
 // The params of a selected effect in gap.json, or nullptr.
@@ -281,8 +286,7 @@ bool NestedGapsInOneUnit(const Json& root, const Json& reference, double g[4]) {
   }
   auto get = [](const Json* block, const char* key, const std::string& metric) {
     const Json* o = block->Find(key);
-    const Json* v = o ? o->Find(metric) : nullptr;
-    return v && v->type == Json::kNumber ? v->number : NAN;
+    return o ? NumberAt(*o, metric) : NAN;
   };
   // Whether a held-out observation lacks its simulated z.
   auto unsimulated = [&](const Json* block, const std::string& metric) {
