@@ -31,6 +31,11 @@ struct Json {
       if (k == key) return &v;
     return nullptr;
   }
+  // The number `key` holds, or NaN (no such key, or not a number).
+  double Number(const std::string& key) const {
+    const Json* v = Find(key);
+    return v && v->type == kNumber ? v->number : NAN;
+  }
   bool empty() const {
     return type == kNull || (type == kArray && items.empty()) ||
            (type == kObject && members.empty()) || (type == kString && text.empty());
@@ -166,15 +171,13 @@ std::set<size_t> NamedRows(const Json& u, const std::vector<records::PanelMetric
     for (size_t i = 0; i < rows.size(); ++i)
       if (Stem(s) == Stem(rows[i].bag)) named.insert(i);
   for (const Json* o : objects) {
-    const Json* d = o->Find("distance_m");
-    if (!d || d->type != Json::kNumber) continue;
-    const Json* a = o->Find("angle_deg");
+    const double d = o->Number("distance_m"), a = o->Number("angle_deg");
+    if (!std::isfinite(d)) continue;
     const Json* l = o->Find("light");
     const Json* p = o->Find("preset");
     for (size_t i = 0; i < rows.size(); ++i) {
-      if (std::fabs(rows[i].distance_m - d->number) > 1e-6) continue;
-      if (a && a->type == Json::kNumber && std::fabs(rows[i].angle_deg - a->number) > 1e-6)
-        continue;
+      if (std::fabs(rows[i].distance_m - d) > 1e-6) continue;
+      if (std::isfinite(a) && std::fabs(rows[i].angle_deg - a) > 1e-6) continue;
       if (l && l->type == Json::kString && rows[i].light != l->text) continue;
       if (p && p->type == Json::kString && rows[i].preset != p->text) continue;
       named.insert(i);
@@ -210,15 +213,14 @@ bool GivesTheLaw(const Json& entry, const OutsideEffect& o,
   if (o.kind != OutsideEffect::kFarOverRead || entry.type != Json::kObject) return false;
   const Json* metric = entry.Find("metric");
   const Json* form = entry.Find("form");
-  const Json* far_end = entry.Find("size_at_far_end");
+  const double far_end = entry.Number("size_at_far_end");
   if (!metric || metric->type != Json::kString || metric->text != "median_bias_m" || !form ||
-      form->type != Json::kString || form->text != "∝ D²" || !far_end ||
-      far_end->type != Json::kNumber)
+      form->type != Json::kString || form->text != "∝ D²" || !std::isfinite(far_end))
     return false;
   double far = 0;
   for (const auto& r : rows) far = std::max(far, r.distance_m);
   const double truth = o.coef * (far / 10) * (far / 10);
-  return truth != 0 && std::fabs(far_end->number - truth) <= 0.2 * std::fabs(truth);
+  return truth != 0 && std::fabs(far_end - truth) <= 0.2 * std::fabs(truth);
 }
 
 // The injected value of a parameter in a scenario ("light/preset"), or the neutral value.
@@ -241,19 +243,13 @@ Truth TruthIn(const Injection& in, const std::string& scenario, const Axis& axis
 
 // A fitted parameter's value in a scenario ("light/preset") from an effect's params: one value,
 // or one per light or per scenario.
-// The number `key` holds in the object o, or NaN.
-double NumberAt(const Json& o, const std::string& key) {
-  const Json* v = o.Find(key);
-  return v && v->type == Json::kNumber ? v->number : NAN;
-}
-
 double ValueIn(const Json& params, const std::string& scenario, const std::string& param) {
   const bool grouped =
       !params.members.empty() && params.members.front().second.type == Json::kObject;
   const Json* group = !grouped                ? &params
                       : params.Find(scenario) ? params.Find(scenario)
                                               : params.Find(LightOf(scenario));
-  return group ? NumberAt(*group, param) : NAN;
+  return group ? group->Number(param) : NAN;
 }
 
 // The params of a selected effect in gap.json, or nullptr.
@@ -286,7 +282,7 @@ bool NestedGapsInOneUnit(const Json& root, const Json& reference, double g[4]) {
   }
   auto get = [](const Json* block, const char* key, const std::string& metric) {
     const Json* o = block->Find(key);
-    return o ? NumberAt(*o, metric) : NAN;
+    return o ? o->Number(metric) : NAN;
   };
   // Whether a held-out observation lacks its simulated z.
   auto unsimulated = [&](const Json* block, const std::string& metric) {

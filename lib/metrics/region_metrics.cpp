@@ -244,13 +244,12 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
   temporal.reserve(pixels_.size());
   std::vector<Eigen::Vector3d> sampled_rays;
   sampled_rays.reserve(pixels_.size());
-  // The sums kept as scalars, the symmetric ones once (the same products as r·rᵀ·ΣZ²,
-  // n·r·rᵀ and ΣZ⁻¹·r; with r_z = 1 a product by it is the other factor). Eigen's temporaries
-  // of r·rᵀ were stored and read back at every pixel here, at a third of this function's time.
-  double w = 0, s0 = 0, s1 = 0, s2 = 0;                             // mom.weight, mom.sum
-  double o00 = 0, o01 = 0, o02 = 0, o11 = 0, o12 = 0, o22 = 0;     // mom.sum_outer
-  double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;     // ata
-  double b0 = 0, b1 = 0, b2 = 0;                                    // atb
+  // The sums kept as scalars, the symmetric ones once: the products of r·rᵀ·ΣZ², n·r·rᵀ and
+  // ΣZ⁻¹·r, each entry's operands in the same order (r_z = 1).
+  double w = 0, m0 = 0, m1 = 0, m2 = 0;                         // mom.weight, mom.sum
+  double o00 = 0, o01 = 0, o02 = 0, o11 = 0, o12 = 0, o22 = 0;  // mom.sum_outer
+  double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;  // ata
+  double b0 = 0, b1 = 0, b2 = 0;                                // atb
   for (std::size_t k = 0; k < pixels_.size(); ++k) {
     const PixelSums& s = sums_[k];
     if (s.n == 0) continue;
@@ -258,9 +257,9 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
     sampled_rays.push_back(r);
     const double x = r.x(), y = r.y(), z = r.z(), sn = s.n;
     w += sn;
-    s0 += x * s.z;
-    s1 += y * s.z;
-    s2 += z * s.z;
+    m0 += x * s.z;
+    m1 += y * s.z;
+    m2 += z * s.z;
     o00 += x * x * s.z2;
     o01 += x * y * s.z2;
     o02 += x * z * s.z2;
@@ -284,7 +283,7 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
     }
   }
   mom.weight = w;
-  mom.sum = {s0, s1, s2};
+  mom.sum = {m0, m1, m2};
   mom.sum_outer << o00, o01, o02, o01, o11, o12, o02, o12, o22;
   ata << a00, a01, a02, a01, a11, a12, a02, a12, a22;
   atb = {b0, b1, b2};
