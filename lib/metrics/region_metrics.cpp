@@ -244,8 +244,8 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
   temporal.reserve(pixels_.size());
   std::vector<Eigen::Vector3d> sampled_rays;
   sampled_rays.reserve(pixels_.size());
-  // The sums kept as scalars, the symmetric ones once: the products of r·rᵀ·ΣZ², n·r·rᵀ and
-  // ΣZ⁻¹·r, each entry's operands in the same order (r_z = 1).
+  // The sums as scalars: r·ΣZ, r·rᵀ·ΣZ², n·r·rᵀ and ΣZ⁻¹·r, entry by entry, the symmetric ones
+  // once (r_z = 1). ata's off-diagonal is (n·y)·x, the lower triangle the LDLT reads.
   double w = 0, m0 = 0, m1 = 0, m2 = 0;                         // mom.weight, mom.sum
   double o00 = 0, o01 = 0, o02 = 0, o11 = 0, o12 = 0, o22 = 0;  // mom.sum_outer
   double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0;  // ata
@@ -267,7 +267,7 @@ KernelResult RegionMetrics::Finish(const Eigen::Vector3d& up_m, records::PanelMe
     o12 += y * z * s.z2;
     o22 += z * z * s.z2;
     a00 += sn * x * x;
-    a01 += sn * y * x;  // the lower triangle's (n·y)·x, which the LDLT reads
+    a01 += sn * y * x;
     a02 += sn * x * z;
     a11 += sn * y * y;
     a12 += sn * y * z;
