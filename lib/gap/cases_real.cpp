@@ -15,14 +15,18 @@ namespace {
 
 // Every depth and range of a row read `length` times as long, the spreads and the mean's
 // departure from the median `spread` times (the slope of the map at the median), the tilt's
-// tangent `tilt` times. The panel's extent is panel_extract's window: the panel's known size
+// tangent `tilt` times. The panel's width and height are the extent, on the fitted plane, of the
+// region's sampled pixels, the region drawn from panel_extract's window: the panel's known size
 // laid on the measured plane (panel/panel_fit.h). Read far, that window lies within the panel's
-// image and measures the known size as before: field bags with a −0.25 px offset (about 1 m far
-// at 16 m) measure 1.006–1.008 m wide there through panel_extract, the simulator's unit with the
-// same offset 1.0006 m, where a length's map would give 1.06–1.07 m. Read near, it takes in the
-// background beyond the panel's outline, which the region's decision leaves out: the panel's
-// image, laid on the nearer plane, is narrower by `length` at most (the simulator's 7.9 %
-// under-read at 16 m: 4.8 % narrower).
+// image and measures the known size as before: the field campaign's bags, with a −0.25 px
+// offset (about 1 m far at 16 m), measure 1.008 m wide on average at 16 m through panel_extract
+// (0.986–1.026 m, tests/data/field_unit_seed11.csv), the simulator's unit with the same offset
+// 1.0006 m, where a length's map gives 1.06–1.07 m. Read near, the window takes in the
+// background beyond the panel's outline, which the region's decision leaves out: the width is
+// the panel's image on the nearer plane, narrower by `length` at most (the bound applied here;
+// the simulator's +0.35 px offset, 7.9 % near at 16 m, measured 4.8 % narrower). The cases inject
+// on the far side only. A table measured in a fixed box (panel_extract --box) would follow
+// `length` on both sides.
 void MapRow(double length, double spread, double tilt, records::PanelMetrics* m) {
   const double tail = m->mean_m - m->median_m;
   m->median_m *= length;

@@ -33,7 +33,8 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   m.mean_m = 16.1;
   m.plane_std_m = 0.1;
   m.temporal_std_m = 0.05;
-  m.panel_width_m = 1.0;
+  m.panel_width_m = 1.02;
+  m.panel_height_m = 0.98;
   m.normal_tilt_deg = 20;
   m.valid_pct = 40;
   records::PanelMetrics sunset = m;
@@ -48,7 +49,9 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   EXPECT_NEAR(rows[0].mean_m - rows[0].median_m, 0.1 * r * r, 1e-9);
   EXPECT_NEAR(rows[0].plane_std_m, 0.1 * r * r, 1e-12);
   EXPECT_NEAR(rows[0].temporal_std_m, 0.05 * r * r, 1e-12);
-  EXPECT_EQ(rows[0].panel_width_m, 1.0) << "read far, the window is the panel's known size";
+  // Read far, the window is the panel's known size on the plane: the extent stays.
+  EXPECT_EQ(rows[0].panel_width_m, 1.02);
+  EXPECT_EQ(rows[0].panel_height_m, 0.98);
   EXPECT_NEAR(std::tan(rows[0].normal_tilt_deg * M_PI / 180), std::tan(20 * M_PI / 180) * r,
               1e-9);
   EXPECT_EQ(rows[0].valid_pct, 40);
@@ -60,14 +63,17 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   EXPECT_NEAR(scaled[0].mean_m, 17.71, 1e-9);
   EXPECT_NEAR(scaled[0].plane_std_m, 0.11, 1e-12);
   EXPECT_NEAR(scaled[0].normal_tilt_deg, 20, 1e-9);
-  EXPECT_EQ(scaled[0].panel_width_m, 1.0);
+  EXPECT_EQ(scaled[0].panel_width_m, 1.02);
+  EXPECT_EQ(scaled[0].panel_height_m, 0.98);
   // Read near, the window takes in the background and the region keeps the panel's image: its
-  // extent on the nearer plane is narrower by the same ratio.
+  // extent on the nearer plane shrinks by the depths' ratio, the bound the map applies.
   c.injected = {{"depth_scale", {{"scale_rel", -0.1}}, ""}};
-  EXPECT_NEAR(InjectIntoRealTable({m}, c, 60)[0].panel_width_m, 0.9, 1e-12);
+  const auto nearer = InjectIntoRealTable({m}, c, 60);
+  EXPECT_NEAR(nearer[0].panel_width_m, 1.02 * 0.9, 1e-12);
+  EXPECT_NEAR(nearer[0].panel_height_m, 0.98 * 0.9, 1e-12);
   c.injected = {{"disparity_offset", {{"delta_px", 0.5}}, ""}};
-  const double near = 60 / (60 / 16.0 + 0.5) / 16;  // 14.1 m
-  EXPECT_NEAR(InjectIntoRealTable({m}, c, 60)[0].panel_width_m, near, 1e-12);
+  const double near = 60 / (60 / 16.0 + 0.5) / 16;  // 14.1 m of 16
+  EXPECT_NEAR(InjectIntoRealTable({m}, c, 60)[0].panel_width_m, 1.02 * near, 1e-12);
   c.injected = {{"disparity_offset", {{"delta_px", -4}}, ""}};  // 3.75 px at 16 m
   EXPECT_THROW(InjectIntoRealTable({m}, c, 60), std::invalid_argument);
   c.injected = {{"panel_tilt", {{"yaw_deg", 10}}, ""}};
