@@ -100,7 +100,7 @@ bool IsRealInjectionCase(const std::string& name);
 // δ/(f·B)); valid_pct and disparity-unit columns stay. A depth scale s reads every depth and
 // the range 1 + s times and leaves the tilt. The panel's extent (width, height), measured in
 // panel_extract's window of the panel's known size on the measured plane: read far it stays,
-// read near it shrinks with the panel's image, by Z'/Z (or 1 + s) at most (MapRow). Throws
+// read near it shrinks with the panel's image, by Z'/Z (or 1 + s), the bound (MapRow). Throws
 // std::invalid_argument for another effect, or an offset that sends a depth beyond infinity.
 std::vector<records::PanelMetrics> InjectIntoRealTable(
     const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb);

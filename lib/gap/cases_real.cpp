@@ -23,10 +23,10 @@ namespace {
 // (0.986–1.026 m, tests/data/field_unit_seed11.csv), the simulator's unit with the same offset
 // 1.0006 m, where a length's map gives 1.06–1.07 m. Read near, the window takes in the
 // background beyond the panel's outline, which the region's decision leaves out: the width is
-// the panel's image on the nearer plane, narrower by `length` at most (the bound applied here;
-// the simulator's +0.35 px offset, 7.9 % near at 16 m, measured 4.8 % narrower). The cases inject
-// on the far side only. A table measured in a fixed box (panel_extract --box) would follow
-// `length` on both sides.
+// the panel's image on the nearer plane, narrower by `length` at most. The map applies that
+// bound (the simulator's +0.35 px offset, 7.9 % near at 16 m, measured 4.8 % narrower); the
+// cases inject on the far side only. A table measured in a fixed box (panel_extract --box)
+// would follow `length` on both sides.
 void MapRow(double length, double spread, double tilt, records::PanelMetrics* m) {
   const double tail = m->mean_m - m->median_m;
   m->median_m *= length;
