@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""How precisely the gap diagnosis sizes one injected effect, over many draws of a withheld case.
+
+The strict suite (scripts/gap_cases.sh) asks every injected size back within 20 % of its
+departure from the neutral value, on five seeds. This runs one case of one registered effect
+(docs/gap/cases.md) at each seed of a range, diagnosed with that effect as the only candidate
+(`diagnose_gap --cases --case NAME --candidates EFFECT`), so that the figure is the fit's own
+precision and not the selection's: every seed is a new draw of the table's placements and noise.
+It prints each seed's fitted size and then, over the seeds fitted in one shared value, the mean,
+its standard error, the spread of one seed and the share within 20 %. A seed whose fit is
+per light or per scenario is listed and counted in the share by its worst group, as the suite's
+judge reads it, but left out of the mean.
+
+Usage: scripts/gap_size_spread.py --case "disparity_offset small" --seeds 6-25
+           [--build build] [--out DIR]
+Each seed's outputs go to DIR/seed-S (a temporary folder, removed, without --out).
+"""
+
+import argparse
+import glob
+import json
+import math
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def fail(msg):
+    print(f"gap_size_spread: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def parse_seeds(text):
+    m = re.fullmatch(r"([1-9][0-9]*)(?:-([1-9][0-9]*))?", text)
+    if not m:
+        fail(f"--seeds: '{text}' is not S or A-B with positive integers")
+    a = int(m.group(1))
+    b = int(m.group(2) or a)
+    if b < a:
+        fail(f"--seeds: '{text}' ends before it starts")
+    return list(range(a, b + 1))
+
+
+def injected_of(cases_md, case):
+    """(effect, {param: value}) from the case's row of cases.md: 'effect (p v, q w)'."""
+    with open(cases_md, encoding="utf-8") as f:
+        for line in f:
+            cols = [c.strip() for c in line.strip().strip("|").split("|")]
+            if len(cols) > 2 and cols[0] == case:
+                m = re.fullmatch(r"([a-z_]+) \(([^()]*)\)", cols[1])
+                if not m:
+                    fail(f"{cases_md}: case '{case}' injects '{cols[1]}': one registered "
+                         "effect on every row is needed")
+                params = {}
+                for item in m.group(2).split(","):
+                    name, _, value = item.strip().partition(" ")
+                    try:
+                        params[name] = float(value)
+                    except ValueError:
+                        fail(f"{cases_md}: '{item}' is not 'param value'")
+                return m.group(1), params
+    fail(f"{cases_md}: no row for case '{case}'")
+
+
+def run_seed(app, case, effect, seed, out):
+    cmd = [app, "--cases", "--seed", str(seed), "--case", case, "--out", out]
+    cmd += ["--candidates", effect]
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        last = (r.stderr.strip().splitlines() or ["(no message)"])[-1]
+        fail(f"seed {seed}: diagnose_gap exited {r.returncode}: {last}")
+    files = glob.glob(os.path.join(out, "cases", "*.json"))
+    if len(files) != 1:
+        fail(f"seed {seed}: expected one gap.json in {out}/cases, found {len(files)}")
+    with open(files[0], encoding="utf-8") as f:
+        return json.load(f)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--case", required=True, help="a case of one registered effect")
+    ap.add_argument("--seeds", required=True, help="S or A-B")
+    ap.add_argument("--build", default=os.environ.get("BUILD_DIR", "build"))
+    ap.add_argument("--out", help="keep each seed's outputs in OUT/seed-S")
+    args = ap.parse_args()
+    seeds = parse_seeds(args.seeds)
+    app = os.path.join(args.build, "apps", "diagnose_gap")
+    if not os.access(app, os.X_OK):
+        fail(f"{app} not built (run scripts/build.sh)")
+    root = args.out or tempfile.mkdtemp(prefix="gap_size_spread.")
+    try:
+        # The case's row of cases.md names its injection: the first seed is run once with one
+        # candidate to read it (every candidate would cost a hundred simulations), and again
+        # with the injected effect alone when that is another.
+        effect = params = None
+        rows = []
+        for seed in seeds:
+            out = os.path.join(root, f"seed-{seed}")
+            if effect is None:
+                gap = run_seed(app, args.case, "disparity_offset", seed, out)
+                effect, params = injected_of(os.path.join(out, "cases.md"), args.case)
+                if effect != "disparity_offset":
+                    gap = run_seed(app, args.case, effect, seed, out)
+            else:
+                gap = run_seed(app, args.case, effect, seed, out)
+            rows.append((seed, gap))
+        neutral = {}
+        for e in rows[0][1]["detection_limits"]["effects"]:
+            if e["effect"] == effect:
+                neutral[e["param"]] = e["neutral"]
+        print(f"case: {args.case}; injected: {effect} "
+              + ", ".join(f"{k} {v:g}" for k, v in params.items())
+              + f"; fitted alone; seeds {seeds[0]}-{seeds[-1]}")
+        shared = {k: [] for k in params}
+        within = 0
+        for seed, gap in rows:
+            fit = next((e for e in gap["effects"] if e["name"] == effect), None)
+            if fit is None:
+                print(f"  seed {seed}: not fitted")
+                continue
+            groups = ([fit["params"]] if fit["scope"] == "shared"
+                      else list(fit["params"].values()))
+            worst = 0.0
+            for g in groups:
+                for k, truth in params.items():
+                    dep = truth - neutral.get(k, 0.0)
+                    err = abs(g[k] - truth) / abs(dep) if dep else math.inf
+                    worst = max(worst, err)
+            within += worst <= 0.2
+            if fit["scope"] == "shared":
+                for k in params:
+                    shared[k].append(fit["params"][k])
+                shown = ", ".join(f"{k} {fit['params'][k]:.4g}" for k in params)
+            else:
+                shown = "; ".join(f"{g}: " + ", ".join(f"{k} {v[k]:.4g}" for k in params)
+                                  for g, v in fit["params"].items())
+            print(f"  seed {seed}: {fit['scope']}: {shown}  (off by {100 * worst:.0f} %)")
+        for k, v in shared.items():
+            if len(v) < 2:
+                print(f"{k}: fewer than two shared fits")
+                continue
+            mean, sd = statistics.mean(v), statistics.stdev(v)
+            se = sd / math.sqrt(len(v))
+            dep = params[k] - neutral.get(k, 0.0)
+            print(f"{k}: {len(v)} shared fits, mean {mean:.4g} (injected {params[k]:g}; "
+                  f"mean − injected = {(mean - params[k]) / se:+.1f} standard errors of the mean), "
+                  f"one seed's spread {sd:.3g} = {100 * sd / abs(dep):.0f} % of the departure "
+                  f"(20 % allowed)")
+        print(f"within 20 %: {within} of {len(rows)} seeds")
+    finally:
+        if not args.out:
+            shutil.rmtree(root, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
