@@ -7,13 +7,16 @@ departure from the neutral value, on five seeds. This runs one case of one regis
 (`diagnose_gap --cases --case NAME --candidates EFFECT`), so that the figure is the fit's own
 precision and not the selection's: every seed is a new draw of the table's placements and noise.
 It prints each seed's fitted size and then, over the seeds fitted in one shared value, the mean,
-its standard error, the spread of one seed and the share within 20 %. A seed whose fit is
-per light or per scenario is listed and counted in the share by its worst group, as the suite's
-judge reads it, but left out of the mean.
+its standard error, the spread of one seed and the share within 20 % (the judge's size
+criterion, read on the fit whether or not the diagnosis selects it). A seed whose fit is per
+light or per scenario is listed and counted in the share by its worst group, but left out of the
+mean. The case must inject one registered effect in every cell, named by the case's first word
+("disparity_offset small", "depth_scale large", "disparity_offset at the noise floor").
 
 Usage: scripts/gap_size_spread.py --case "disparity_offset small" --seeds 6-25
-           [--build build] [--out DIR]
-Each seed's outputs go to DIR/seed-S (a temporary folder, removed, without --out).
+           [--build BUILD_DIR] [--out DIR]
+BUILD_DIR (default: build, from the project's root) holds apps/diagnose_gap. Each seed's outputs
+go to DIR/seed-S, a folder that must not exist yet (a temporary folder, removed, without --out).
 """
 
 import argparse
@@ -51,10 +54,11 @@ def injected_of(cases_md, case):
         for line in f:
             cols = [c.strip() for c in line.strip().strip("|").split("|")]
             if len(cols) > 2 and cols[0] == case:
-                m = re.fullmatch(r"([a-z_]+) \(([^()]*)\)", cols[1])
-                if not m:
-                    fail(f"{cases_md}: case '{case}' injects '{cols[1]}': one registered "
-                         "effect on every row is needed")
+                m = re.fullmatch(r"([a-z_]+) \(([^(),;]* [^(),;]*(?:, [^(),;]* [^(),;]*)*)\)",
+                                 cols[1])
+                if not m or " only" in cols[1]:
+                    fail(f"case '{case}' injects '{cols[1]}': one registered effect in every "
+                         "cell is needed")
                 params = {}
                 for item in m.group(2).split(","):
                     name, _, value = item.strip().partition(" ")
@@ -67,6 +71,8 @@ def injected_of(cases_md, case):
 
 
 def run_seed(app, case, effect, seed, out):
+    if os.path.exists(out):
+        fail(f"{out} exists: give --out a folder without seed-S folders in it")
     cmd = [app, "--cases", "--seed", str(seed), "--case", case, "--out", out]
     cmd += ["--candidates", effect]
     r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -82,36 +88,43 @@ def run_seed(app, case, effect, seed, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--case", required=True, help="a case of one registered effect")
+    ap.add_argument("--case", required=True,
+                    help="a case of one registered effect of continuous parameters")
     ap.add_argument("--seeds", required=True, help="S or A-B")
-    ap.add_argument("--build", default=os.environ.get("BUILD_DIR", "build"))
+    ap.add_argument("--build", default=os.environ.get("BUILD_DIR") or os.path.join(
+        os.path.dirname(os.path.abspath(__file__)), "..", "build"))
     ap.add_argument("--out", help="keep each seed's outputs in OUT/seed-S")
     args = ap.parse_args()
     seeds = parse_seeds(args.seeds)
+    if (not re.fullmatch(r"[a-z_]+ .+", args.case) or "+" in args.case or " only" in args.case
+            or "outside" in args.case or args.case.startswith(("no effect", "unit", "field"))):
+        fail(f"case '{args.case}': a case of one registered effect in every cell is needed "
+             "(\"EFFECT small\", \"EFFECT large\", \"disparity_offset at the noise floor\")")
+    if args.out and os.path.exists(args.out) and os.listdir(args.out):
+        fail(f"--out {args.out}: not empty")
     app = os.path.join(args.build, "apps", "diagnose_gap")
     if not os.access(app, os.X_OK):
         fail(f"{app} not built (run scripts/build.sh)")
     root = args.out or tempfile.mkdtemp(prefix="gap_size_spread.")
     try:
-        # The case's row of cases.md names its injection: the first seed is run once with one
-        # candidate to read it (every candidate would cost a hundred simulations), and again
-        # with the injected effect alone when that is another.
-        effect = params = None
+        # The case's first word names its effect; its row of cases.md, the injection.
+        effect, params = args.case.split()[0], None
         rows = []
         for seed in seeds:
             out = os.path.join(root, f"seed-{seed}")
-            if effect is None:
-                gap = run_seed(app, args.case, "disparity_offset", seed, out)
-                effect, params = injected_of(os.path.join(out, "cases.md"), args.case)
-                if effect != "disparity_offset":
-                    gap = run_seed(app, args.case, effect, seed, out)
-            else:
-                gap = run_seed(app, args.case, effect, seed, out)
+            gap = run_seed(app, args.case, effect, seed, out)
+            if params is None:
+                injected, params = injected_of(os.path.join(out, "cases.md"), args.case)
+                if injected != effect:
+                    fail(f"case '{args.case}' injects {injected}, not {effect}")
             rows.append((seed, gap))
         neutral = {}
         for e in rows[0][1]["detection_limits"]["effects"]:
             if e["effect"] == effect:
                 neutral[e["param"]] = e["neutral"]
+        if set(params) - set(neutral):
+            fail(f"{effect}: no neutral value published for "
+                 + ", ".join(sorted(set(params) - set(neutral))))
         print(f"case: {args.case}; injected: {effect} "
               + ", ".join(f"{k} {v:g}" for k, v in params.items())
               + f"; fitted alone; seeds {seeds[0]}-{seeds[-1]}")
@@ -127,7 +140,7 @@ def main():
             worst = 0.0
             for g in groups:
                 for k, truth in params.items():
-                    dep = truth - neutral.get(k, 0.0)
+                    dep = truth - neutral[k]
                     err = abs(g[k] - truth) / abs(dep) if dep else math.inf
                     worst = max(worst, err)
             within += worst <= 0.2
@@ -145,9 +158,11 @@ def main():
                 continue
             mean, sd = statistics.mean(v), statistics.stdev(v)
             se = sd / math.sqrt(len(v))
-            dep = params[k] - neutral.get(k, 0.0)
+            off = (f"{(mean - params[k]) / se:+.1f} standard errors of the mean" if se > 0
+                   else "every fit equal")
+            dep = params[k] - neutral[k]
             print(f"{k}: {len(v)} shared fits, mean {mean:.4g} (injected {params[k]:g}; "
-                  f"mean − injected = {(mean - params[k]) / se:+.1f} standard errors of the mean), "
+                  f"mean − injected: {off}), "
                   f"one seed's spread {sd:.3g} = {100 * sd / abs(dep):.0f} % of the departure "
                   f"(20 % allowed)")
         print(f"within 20 %: {within} of {len(rows)} seeds")
