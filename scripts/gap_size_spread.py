@@ -11,7 +11,8 @@ its standard error, the spread of one seed and the share within 20 % (the judge'
 criterion, read on the fit whether or not the diagnosis selects it). A seed whose fit is per
 light or per scenario is listed and counted in the share by its worst group, but left out of the
 mean. The case must inject one registered effect in every cell, named by the case's first word
-("disparity_offset small", "depth_scale large", "disparity_offset at the noise floor").
+("disparity_offset small", "depth_scale large", "disparity_offset at the noise floor"), whose
+parameters are continuous (not edge_mixing or region_spill, whose width is a whole pixel).
 
 Usage: scripts/gap_size_spread.py --case "disparity_offset small" --seeds 6-25
            [--build BUILD_DIR] [--out DIR]
@@ -96,19 +97,25 @@ def main():
     ap.add_argument("--out", help="keep each seed's outputs in OUT/seed-S")
     args = ap.parse_args()
     seeds = parse_seeds(args.seeds)
-    if (not re.fullmatch(r"[a-z_]+ .+", args.case) or "+" in args.case or " only" in args.case
-            or "outside" in args.case or args.case.startswith(("no effect", "unit", "field"))):
+    if args.case.startswith(("unit", "field")) or not re.fullmatch(r"[a-z_]+ .+", args.case):
+        fail(f"case '{args.case}': the case's name must start with its effect (the unit and "
+             "field cases are not read)")
+    if "+" in args.case or " only" in args.case or "outside" in args.case or \
+            args.case.startswith("no effect"):
         fail(f"case '{args.case}': a case of one registered effect in every cell is needed "
              "(\"EFFECT small\", \"EFFECT large\", \"disparity_offset at the noise floor\")")
-    if args.out and os.path.exists(args.out) and os.listdir(args.out):
-        fail(f"--out {args.out}: not empty")
+    if args.out and os.path.exists(args.out) and (not os.path.isdir(args.out)
+                                                  or os.listdir(args.out)):
+        fail(f"--out {args.out}: not an empty folder")
     app = os.path.join(args.build, "apps", "diagnose_gap")
     if not os.access(app, os.X_OK):
         fail(f"{app} not built (run scripts/build.sh)")
     root = args.out or tempfile.mkdtemp(prefix="gap_size_spread.")
     try:
-        # The case's first word names its effect; its row of cases.md, the injection.
-        effect, params = args.case.split()[0], None
+        # The case's first word names its effect; its row of cases.md, the injection; the first
+        # gap.json, each parameter's neutral value (a case is read only when every parameter
+        # has one and none is a discrete width, which the judge reads exactly).
+        effect, params, neutral = args.case.split()[0], None, {}
         rows = []
         for seed in seeds:
             out = os.path.join(root, f"seed-{seed}")
@@ -117,14 +124,17 @@ def main():
                 injected, params = injected_of(os.path.join(out, "cases.md"), args.case)
                 if injected != effect:
                     fail(f"case '{args.case}' injects {injected}, not {effect}")
+                for e in gap.get("detection_limits", {}).get("effects", []):
+                    if e.get("effect") == effect and not e.get("discrete", False):
+                        neutral[e["param"]] = e["neutral"]
+                missing = sorted(set(params) - set(neutral))
+                if missing:
+                    fail(f"{effect}: no continuous parameter's neutral value published for "
+                         + ", ".join(missing)
+                         + ": a case of one effect whose parameters are continuous is needed")
+                if any(params[k] == neutral[k] for k in params):
+                    fail(f"case '{args.case}' injects a neutral value")
             rows.append((seed, gap))
-        neutral = {}
-        for e in rows[0][1]["detection_limits"]["effects"]:
-            if e["effect"] == effect:
-                neutral[e["param"]] = e["neutral"]
-        if set(params) - set(neutral):
-            fail(f"{effect}: no neutral value published for "
-                 + ", ".join(sorted(set(params) - set(neutral))))
         print(f"case: {args.case}; injected: {effect} "
               + ", ".join(f"{k} {v:g}" for k, v in params.items())
               + f"; fitted alone; seeds {seeds[0]}-{seeds[-1]}")
