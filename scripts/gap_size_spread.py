@@ -10,9 +10,10 @@ It prints each seed's fitted size and then, over the seeds fitted in one shared 
 its standard error, the spread of one seed and the share within 20 % (the judge's size
 criterion, read on the fit whether or not the diagnosis selects it). A seed whose fit is per
 light or per scenario is listed and counted in the share by its worst group, but left out of the
-mean. The case must inject one registered effect in every cell, named by the case's first word
-("disparity_offset small", "depth_scale large", "disparity_offset at the noise floor"), whose
-parameters are continuous (not edge_mixing or region_spill, whose width is a whole pixel).
+mean. The case must inject one registered effect of one parameter in every cell, named by the
+case's first word ("disparity_offset small", "depth_scale large", "disparity_offset at the noise
+floor"; not edge_mixing or region_spill, of two parameters). The case's row and gap.json are read
+as scripts/gap_cases_seeds.py reads them.
 
 Usage: scripts/gap_size_spread.py --case "disparity_offset small" --seeds 6-25
            [--build BUILD_DIR] [--out DIR]
@@ -21,8 +22,6 @@ go to DIR/seed-S, a folder that must not exist yet (a temporary folder, removed,
 """
 
 import argparse
-import glob
-import json
 import math
 import os
 import re
@@ -31,6 +30,9 @@ import statistics
 import subprocess
 import sys
 import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from gap_cases_seeds import injected_sizes, load_gap, read_table  # noqa: E402
 
 
 def fail(msg):
@@ -50,25 +52,21 @@ def parse_seeds(text):
 
 
 def injected_of(cases_md, case):
-    """(effect, {param: value}) from the case's row of cases.md: 'effect (p v, q w)'."""
-    with open(cases_md, encoding="utf-8") as f:
-        for line in f:
-            cols = [c.strip() for c in line.strip().strip("|").split("|")]
-            if len(cols) > 2 and cols[0] == case:
-                m = re.fullmatch(r"([a-z_]+) \(([^(),;]* [^(),;]*(?:, [^(),;]* [^(),;]*)*)\)",
-                                 cols[1])
-                if not m or " only" in cols[1]:
-                    fail(f"case '{case}' injects '{cols[1]}': one registered effect in every "
-                         "cell is needed")
-                params = {}
-                for item in m.group(2).split(","):
-                    name, _, value = item.strip().partition(" ")
-                    try:
-                        params[name] = float(value)
-                    except ValueError:
-                        fail(f"{cases_md}: '{item}' is not 'param value'")
-                return m.group(1), params
-    fail(f"{cases_md}: no row for case '{case}'")
+    """(effect, param, value) of the case's one effect of one parameter, injected in every cell,
+    from its row of cases.md."""
+    try:
+        row = read_table(cases_md).get(case)
+    except ValueError as e:
+        fail(str(e))
+    if row is None:
+        fail(f"{cases_md}: no row for case '{case}'")
+    text = row[2]
+    sizes = injected_sizes(text)
+    if len(sizes) != 1 or len(re.findall(r"\w+ \(", text)) != 1:
+        fail(f"case '{case}' injects '{text}': one registered effect of one parameter in every "
+             "cell is needed")
+    effect, (param, value) = next(iter(sizes.items()))
+    return effect, param, value
 
 
 def run_seed(app, case, effect, seed, out):
@@ -80,11 +78,10 @@ def run_seed(app, case, effect, seed, out):
     if r.returncode != 0:
         last = (r.stderr.strip().splitlines() or ["(no message)"])[-1]
         fail(f"seed {seed}: diagnose_gap exited {r.returncode}: {last}")
-    files = glob.glob(os.path.join(out, "cases", "*.json"))
-    if len(files) != 1:
-        fail(f"seed {seed}: expected one gap.json in {out}/cases, found {len(files)}")
-    with open(files[0], encoding="utf-8") as f:
-        return json.load(f)
+    gap = load_gap(os.path.join(out, "cases.md"), case)
+    if gap is None:
+        fail(f"seed {seed}: diagnose_gap wrote no gap.json for '{case}' in {out}/cases")
+    return gap
 
 
 def main():
@@ -113,68 +110,53 @@ def main():
     root = args.out or tempfile.mkdtemp(prefix="gap_size_spread.")
     try:
         # The case's first word names its effect; its row of cases.md, the injection; the first
-        # gap.json, each parameter's neutral value (a case is read only when every parameter
-        # has one and none is a discrete width, which the judge reads exactly).
-        effect, params, neutral = args.case.split()[0], None, {}
+        # gap.json, the parameter's neutral value.
+        effect, param, truth, neutral = args.case.split()[0], None, None, None
         rows = []
         for seed in seeds:
             out = os.path.join(root, f"seed-{seed}")
             gap = run_seed(app, args.case, effect, seed, out)
-            if params is None:
-                injected, params = injected_of(os.path.join(out, "cases.md"), args.case)
+            if param is None:
+                injected, param, truth = injected_of(os.path.join(out, "cases.md"), args.case)
                 if injected != effect:
                     fail(f"case '{args.case}' injects {injected}, not {effect}")
-                for e in gap.get("detection_limits", {}).get("effects", []):
-                    if e.get("effect") == effect and not e.get("discrete", False):
-                        neutral[e["param"]] = e["neutral"]
-                missing = sorted(set(params) - set(neutral))
-                if missing:
-                    fail(f"{effect}: no continuous parameter's neutral value published for "
-                         + ", ".join(missing)
-                         + ": a case of one effect whose parameters are continuous is needed")
-                if any(params[k] == neutral[k] for k in params):
-                    fail(f"case '{args.case}' injects a neutral value")
+                neutral = next((e["neutral"] for e in gap.get("detection_limits", {})
+                                .get("effects", []) if e.get("effect") == effect and
+                                e.get("param") == param), None)
+                if neutral is None:
+                    fail(f"{effect}: no neutral value of {param} published")
+                if truth == neutral:
+                    fail(f"case '{args.case}' injects the neutral value")
             rows.append((seed, gap))
-        print(f"case: {args.case}; injected: {effect} "
-              + ", ".join(f"{k} {v:g}" for k, v in params.items())
-              + f"; fitted alone; seeds {seeds[0]}-{seeds[-1]}")
-        shared = {k: [] for k in params}
-        within = 0
+        departure = abs(truth - neutral)
+        print(f"case: {args.case}; injected: {effect} {param} {truth:g}; fitted alone; "
+              f"seeds {seeds[0]}-{seeds[-1]}")
+        shared, within = [], 0
         for seed, gap in rows:
             fit = next((e for e in gap["effects"] if e["name"] == effect), None)
             if fit is None:
                 print(f"  seed {seed}: not fitted")
                 continue
-            groups = ([fit["params"]] if fit["scope"] == "shared"
-                      else list(fit["params"].values()))
-            worst = 0.0
-            for g in groups:
-                for k, truth in params.items():
-                    dep = truth - neutral[k]
-                    err = abs(g[k] - truth) / abs(dep) if dep else math.inf
-                    worst = max(worst, err)
-            within += worst <= 0.2
             if fit["scope"] == "shared":
-                for k in params:
-                    shared[k].append(fit["params"][k])
-                shown = ", ".join(f"{k} {fit['params'][k]:.4g}" for k in params)
+                groups = {"": fit["params"]}
+                shared.append(fit["params"][param])
             else:
-                shown = "; ".join(f"{g}: " + ", ".join(f"{k} {v[k]:.4g}" for k in params)
-                                  for g, v in fit["params"].items())
+                groups = fit["params"]
+            worst = max(abs(g[param] - truth) for g in groups.values()) / departure
+            within += worst <= 0.2
+            shown = "; ".join(f"{name + ': ' if name else ''}{param} {g[param]:.4g}"
+                              for name, g in groups.items())
             print(f"  seed {seed}: {fit['scope']}: {shown}  (off by {100 * worst:.0f} %)")
-        for k, v in shared.items():
-            if len(v) < 2:
-                print(f"{k}: fewer than two shared fits")
-                continue
-            mean, sd = statistics.mean(v), statistics.stdev(v)
-            se = sd / math.sqrt(len(v))
-            off = (f"{(mean - params[k]) / se:+.1f} standard errors of the mean" if se > 0
+        if len(shared) < 2:
+            print(f"{param}: fewer than two shared fits")
+        else:
+            mean, sd = statistics.mean(shared), statistics.stdev(shared)
+            se = sd / math.sqrt(len(shared))
+            off = (f"{(mean - truth) / se:+.1f} standard errors of the mean" if se > 0
                    else "every fit equal")
-            dep = params[k] - neutral[k]
-            print(f"{k}: {len(v)} shared fits, mean {mean:.4g} (injected {params[k]:g}; "
-                  f"mean − injected: {off}), "
-                  f"one seed's spread {sd:.3g} = {100 * sd / abs(dep):.0f} % of the departure "
-                  f"(20 % allowed)")
+            print(f"{param}: {len(shared)} shared fits, mean {mean:.4g} (injected {truth:g}; "
+                  f"mean − injected: {off}), one seed's spread {sd:.3g} = "
+                  f"{100 * sd / departure:.0f} % of the departure (20 % allowed)")
         print(f"within 20 %: {within} of {len(rows)} seeds")
     finally:
         if not args.out:
