@@ -163,6 +163,11 @@ struct NestedFold {
   // of z (NaN where not held out or not valid).
   ModelFit fit;
   std::vector<double> y, unit;
+  // What the fold fitted, for the reader: each scenario's σ_d and hole probability in its
+  // calibrated base and beside its selection, and each metric's Σz² on its held-out cells
+  // simulated with the calibrated base and with the selection (empty where not simulated).
+  std::vector<sim::ScenarioParams> scenarios_calibrated, scenarios_selected;
+  std::vector<double> simulated_calibrated_sq_metric, simulated_sq_metric;
 };
 
 // A selected term's size without each fold's cells: the selection refitted on the other cells

@@ -99,6 +99,11 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
     if (!sel.success) throw std::invalid_argument(sel.message);
     for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
     nf.fit = sel.current;
+    for (const ModelFit* fit : {&sel.m0, &sel.current}) {
+      auto& to = fit == &sel.m0 ? nf.scenarios_calibrated : nf.scenarios_selected;
+      const auto per = SelectedParams(sims, sim::SimParams(), *fit, d);
+      for (int s = 0; s < d.num_scenarios(); ++s) to.push_back(per[s].sensor.scenarios[s]);
+    }
     nf.y.assign(obs, NAN);
     nf.unit.assign(obs, NAN);
     for (size_t o = 0; o < obs; ++o)
@@ -122,6 +127,13 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
       const double all_sq = SumSq(out.zs), calibrated_sq = SumSq(out.zsc);
       nf.simulated_calibrated_sq = calibrated_sq;
       nf.simulated_sq = all_sq;
+      nf.simulated_calibrated_sq_metric.assign(kk, 0.0);
+      nf.simulated_sq_metric.assign(kk, 0.0);
+      for (size_t o = 0; o < obs; ++o) {
+        const double a = out.zsc[o], b = out.zs[o];
+        if (std::isfinite(a)) nf.simulated_calibrated_sq_metric[o % kk] += a * a;
+        if (std::isfinite(b)) nf.simulated_sq_metric[o % kk] += b * b;
+      }
       // Each effect's own part: the selection simulated without it, the others at their values.
       for (size_t j = 0; j < sel.current.terms.size(); ++j) {
         std::vector<double> without = out.zsc;

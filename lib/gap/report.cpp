@@ -158,7 +158,23 @@ void NestedJson(JsonWriter& w, const DiagnoseResult& r) {
     for (double g : f.effect_gain_simulated) w.Number(g);
     w.EndArray().BeginArray("effect_share_moved");
     for (double g : f.effect_share_moved) w.Number(g);
-    w.EndArray().EndObject();
+    w.EndArray().BeginObject("simulated_sq_per_metric");  // {calibrated, selected}: {metric: Σz²}
+    for (const auto* v : {&f.simulated_calibrated_sq_metric, &f.simulated_sq_metric}) {
+      w.BeginObject(v == &f.simulated_sq_metric ? "selected" : "calibrated");
+      for (size_t k = 0; k < v->size() && k < r.metric_names.size(); ++k)
+        w.Number(r.metric_names[k], (*v)[k]);
+      w.EndObject();
+    }
+    w.EndObject().BeginObject("calibration").BeginArray("scenarios");  // the fold's own
+    for (size_t s = 0; s < f.scenarios_calibrated.size() && s < f.scenarios_selected.size(); ++s)
+      w.BeginObject().String("scenario", r.design.scenario_names[s]).BeginObject("sigma_d_px")
+          .Number("calibrated", f.scenarios_calibrated[s].sigma_d_px)
+          .Number("selected", f.scenarios_selected[s].sigma_d_px).EndObject()
+          .BeginObject("invalid_prob").Number("calibrated", f.scenarios_calibrated[s].invalid_prob)
+          .Number("selected", f.scenarios_selected[s].invalid_prob).EndObject().EndObject();
+    w.EndArray().EndObject().BeginObject("params");  // the selection's values, effect by effect
+    for (const TermFit& t : f.fit.terms) ParamsJson(w, CandidateOf(r, t).effect, r, t, false);
+    w.EndObject().EndObject();
   }
   w.EndArray();
   GapJsonStat(w, "baseline", r, n.baseline);

@@ -99,7 +99,8 @@ TEST(DiagnoseGapApp, WritesGapJsonAndReport) {
                           "\"shrink_in_sample_pct\"", "\"shrink_heldout_pct\"", "\"ci95\"",
                           "\"params\"", "\"noise_method\"", "\"placement\"", "\"emitter\"",
                           "\"shrink_simulated_pct\"", "\"shrink_heldout_nested_pct\"",
-                          "\"unexplained\"", "\"ambiguous\"", "\"detection_limits\""})
+                          "\"unexplained\"", "\"ambiguous\"", "\"detection_limits\"",
+                          "\"simulated_sq_per_metric\""})
     EXPECT_NE(json.find(key), std::string::npos) << key;
   const std::string md = ReadFile(d / "out" / "report.md");
   for (const char* part : {"## 1. The gap", "## 2. Where", "## 3. Which effect", "## 4. How far",
