@@ -99,9 +99,11 @@ FoldRun RunFold(const Design& d, const Simulations& sims, const sim::SimParams& 
     if (!sel.success) throw std::invalid_argument(sel.message);
     for (const auto& s : sel.steps) nf.selected.push_back(s.effect);
     nf.fit = sel.current;
-    for (const ModelFit* fit : {&sel.m0, &sel.current}) {
+    for (const ModelFit* fit : {&sel.m0, &sel.current}) {  // their σ_d and hole probability
+      ModelFit nuisance = *fit;
+      nuisance.terms.clear();  // the effects' departures are not needed (nor built)
       auto& to = fit == &sel.m0 ? nf.scenarios_calibrated : nf.scenarios_selected;
-      const auto per = SelectedParams(sims, sim::SimParams(), *fit, d);
+      const auto per = SelectedParams(sims, sim::SimParams(), nuisance, d);
       for (int s = 0; s < d.num_scenarios(); ++s) to.push_back(per[s].sensor.scenarios[s]);
     }
     nf.y.assign(obs, NAN);
