@@ -258,6 +258,24 @@ bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
   return true;
 }
 
+Design Subset(const Design& d, const std::vector<char>& cells) {
+  Design s;
+  s.scenario_names = d.scenario_names;
+  s.light_names = d.light_names;
+  s.scenario_light = d.scenario_light;
+  s.metrics = d.metrics;
+  const int kk = d.num_metrics();
+  for (int c = 0; c < d.num_cells(); ++c) {
+    if (!cells[c]) continue;
+    s.cells.push_back(d.cells[c]);
+    s.row.push_back(d.row[c]);
+    s.bag.push_back(d.bag[c]);
+    s.scenario.push_back(d.scenario[c]);
+    for (int k = 0; k < kk; ++k) s.real.push_back(d.real[static_cast<size_t>(c) * kk + k]);
+  }
+  return s;
+}
+
 bool ParseHoldout(const std::string& text, Holdout* h, std::string* why) {
   Holdout out;
   if (text == "distance") {

@@ -116,6 +116,9 @@ int ScreenRows(const DesignRules& rules, std::vector<records::PanelMetrics>* row
 bool BuildDesign(const std::vector<records::PanelMetrics>& rows, Design* design,
                  std::string* why);
 
+// The cells of `design` marked in `cells`, scenarios and metrics kept.
+Design Subset(const Design& design, const std::vector<char>& cells);
+
 // Which cells a cross-validation holds out together.
 enum class HoldoutKind { kDistance, kPoint, kLight, kPreset };
 struct Holdout {

@@ -12,24 +12,6 @@
 
 namespace depthbias::gap {
 
-Design Subset(const Design& d, const std::vector<char>& cells) {
-  Design s;
-  s.scenario_names = d.scenario_names;
-  s.light_names = d.light_names;
-  s.scenario_light = d.scenario_light;
-  s.metrics = d.metrics;
-  const int kk = d.num_metrics();
-  for (int c = 0; c < d.num_cells(); ++c) {
-    if (!cells[c]) continue;
-    s.cells.push_back(d.cells[c]);
-    s.row.push_back(d.row[c]);
-    s.bag.push_back(d.bag[c]);
-    s.scenario.push_back(d.scenario[c]);
-    for (int k = 0; k < kk; ++k) s.real.push_back(d.real[static_cast<size_t>(c) * kk + k]);
-  }
-  return s;
-}
-
 namespace {
 
 // The held-out cells (`held`) simulated with `fit` added to the base, as [obs] values (NaN

@@ -31,7 +31,4 @@ bool RestrictNested(const Design& design, const Simulations& sims, const sim::Si
 // [1] (NaN: its change moved nothing there). False where the fold was not simulated.
 bool OwnPart(const NestedFold& f, size_t j, double part[2]);
 
-// The cells of `design` marked in `cells`, scenarios and metrics kept.
-Design Subset(const Design& design, const std::vector<char>& cells);
-
 }  // namespace depthbias::gap

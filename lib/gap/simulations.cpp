@@ -183,6 +183,10 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
     s.moved_rel = options.placement_probe;
   }
 
+  const size_t k_count = static_cast<size_t>(d.num_metrics());
+  std::vector<char> emitter_on(d.cells.size(), 0);
+  for (size_t c = 0; c < d.cells.size(); ++c) emitter_on[c] = d.cells[c].emitter_on;
+  if (std::find(emitter_on.begin(), emitter_on.end(), 1) == emitter_on.end()) emitter_on.clear();
   for (const Candidate& cand : candidates) {
     Surface surf;
     surf.candidate = cand;
@@ -205,7 +209,20 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
         sim::SimParams p = base;
         if (!sim::BuildDepartures({SpecAt(cand, values)}, &p.departures, &why))
           throw std::invalid_argument("candidate " + cand.effect + ": " + why);
-        v = run(p);
+        if (p.departures.OnlyEmitter() && !emitter_on.empty()) {
+          // The emitter's gain alone: the emitter-off cells are the base's, bit for bit.
+          ++s.runs;
+          const std::vector<double> on = SimulateValues({p}, Subset(d, emitter_on), options);
+          std::vector<double> all(s.base.begin(), s.base.end());
+          for (size_t c = 0, j = 0; c < d.cells.size(); ++c) {
+            if (!emitter_on[c]) continue;
+            for (size_t k = 0; k < k_count; ++k) all[c * k_count + k] = on[j * k_count + k];
+            ++j;
+          }
+          v = std::move(all);
+        } else {
+          v = run(p);
+        }
       }
       for (size_t i = 0; i < obs; ++i) surf.table[i * surf.num_nodes + node] = v[i];
     }

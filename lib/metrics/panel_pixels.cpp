@@ -9,54 +9,46 @@
 namespace depthbias::metrics {
 namespace {
 
-// Inverse-depth plane 1/Z = k·(x/z, y/z, 1) of the pixels' means, each weighted by its samples;
-// false when fewer than 3 pixels or a degenerate system.
-// weight_per_mean[k] = weight[k] / mean_m[k].
-bool FitInverseDepthPlane(const std::vector<Eigen::Vector3d>& rays,
-                          const std::vector<double>& weight_per_mean,
-                          const std::vector<double>& weight,
-                          const std::vector<std::uint8_t>& use, Plane* plane) {
-  // The rays are (x, y, 1): the normal matrix's six distinct sums are kept.
+// The normal equations of an inverse-depth plane 1/Z = k·(x/z, y/z, 1) of pixels' means, each
+// weighted by its samples, summed pixel after pixel. The rays are (x, y, 1): the normal matrix's
+// six distinct sums are kept.
+struct InverseDepthSums {
   double sw = 0, swx = 0, swy = 0, swxx = 0, swxy = 0, swyy = 0;
   Eigen::Vector3d atb = Eigen::Vector3d::Zero();
   int used = 0;
-  for (std::size_t k = 0; k < rays.size(); ++k) {
-    if (!use[k]) continue;
-    const double w = weight[k], x = rays[k].x(), y = rays[k].y();
+
+  // weight_per_mean = weight / the pixel's mean depth.
+  void Add(const Eigen::Vector3d& ray, double weight, double weight_per_mean) {
+    const double w = weight, x = ray.x(), y = ray.y();
     sw += w;
     swx += w * x;
     swy += w * y;
     swxx += w * x * x;
     swxy += w * x * y;
     swyy += w * y * y;
-    atb += weight_per_mean[k] * rays[k];
+    atb += weight_per_mean * ray;
     ++used;
   }
-  if (used < 3) return false;
-  Eigen::Matrix3d ata;
-  ata << swxx, swxy, swx, swxy, swyy, swy, swx, swy, sw;
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
-  const Eigen::Vector3d k = ldlt.solve(atb);
-  const double len = k.norm();
-  if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12) || !std::isfinite(len) ||
-      !(len > 0))
-    return false;
-  plane->normal = -k / len;
-  plane->offset_m = 1.0 / len;
-  return true;
-}
-
-// 1.4826 × the median of |disparity residual|·√n over the used pixels: σ_d of one sample.
-// disparity[k] = fb / mean_m[k], sqrt_weight[k] = √weight[k], zp[k] the plane's depth on the
-// pixel's ray (Plane::DepthOnRay); r is scratch.
-double ScatterPx(const std::vector<double>& zp, const std::vector<double>& disparity,
-                 const std::vector<double>& sqrt_weight, const std::vector<std::uint8_t>& use,
-                 double fb, std::vector<double>& r) {
-  r.clear();
-  for (std::size_t k = 0; k < zp.size(); ++k) {
-    if (!use[k] || !std::isfinite(zp[k])) continue;
-    r.push_back(std::fabs(disparity[k] - fb / zp[k]) * sqrt_weight[k]);
+  // False when fewer than 3 pixels or a degenerate system.
+  bool Solve(Plane* plane) const {
+    if (used < 3) return false;
+    Eigen::Matrix3d ata;
+    ata << swxx, swxy, swx, swxy, swyy, swy, swx, swy, sw;
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(ata);
+    const Eigen::Vector3d k = ldlt.solve(atb);
+    const double len = k.norm();
+    if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12) || !std::isfinite(len) ||
+        !(len > 0))
+      return false;
+    plane->normal = -k / len;
+    plane->offset_m = 1.0 / len;
+    return true;
   }
+};
+
+// 1.4826 × the median of r (|disparity residual|·√n of the used pixels, reordered): σ_d of
+// one sample.
+double ScatterPx(std::vector<double>& r) {
   if (r.empty()) return 0.0;
   const std::size_t mid = r.size() / 2;
   std::nth_element(r.begin(), r.begin() + mid, r.end());
@@ -107,19 +99,16 @@ PixelClass ClassifyMeanDepth(const Eigen::Vector3d& ray, std::uint32_t n, double
 bool FitPooledPlane(const camera::Intrinsics& in, const std::vector<std::uint32_t>& pixels,
                     const std::vector<PooledPixel>& pooled, double units, Plane* plane) {
   const std::size_t n = std::min(pixels.size(), pooled.size());
-  std::vector<Eigen::Vector3d> rays(n);
-  std::vector<double> weight(n, 0.0), n_per_z(n, 0.0);
-  std::vector<std::uint8_t> use(n, 0);
   const PixelNormalizer normalized(in);
+  InverseDepthSums sums;
   for (std::size_t k = 0; k < n; ++k) {
     if (pooled[k].count == 0 || pooled[k].sum_counts == 0) continue;
     const Eigen::Vector2d r = normalized.OfIndex(pixels[k]);
-    rays[k] = {r.x(), r.y(), 1.0};
-    weight[k] = pooled[k].count;
-    n_per_z[k] = weight[k] / (static_cast<double>(pooled[k].sum_counts) / pooled[k].count * units);
-    use[k] = 1;
+    const double weight = pooled[k].count;
+    sums.Add({r.x(), r.y(), 1.0}, weight,
+             weight / (static_cast<double>(pooled[k].sum_counts) / pooled[k].count * units));
   }
-  return FitInverseDepthPlane(rays, n_per_z, weight, use, plane);
+  return sums.Solve(plane);
 }
 
 PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& region,
@@ -127,39 +116,39 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
                               const Plane* ground, const PanelPixelParams& p) {
   PanelPixels out;
   const std::size_t n = region.pixels.size();
+  const double fb = in.fx * p.baseline_m;
+  // Each observed pixel's ray, mean depth and samples, and what does not change from one plane
+  // to the next: the ground, √n, 1/√n, n/Z, f·B/Z. The first plane: every observed pixel, each
+  // counted once (a textured background seen past the panel's edge gives many samples a pixel
+  // where a hole-ridden panel gives few: weighted by its samples, a strip of it would pull the
+  // first plane off the panel); then the pixels on it, each weighted by its samples, until they
+  // no longer change.
   std::vector<Eigen::Vector3d> rays(n);
   std::vector<double> mean_m(n, 0.0), weight(n, 0.0);
-  std::vector<std::uint8_t> use(n, 0);
+  std::vector<std::uint8_t> observed(n, 0), on_ground(n, 0);
+  std::vector<double> inv_sqrt_n(n, 0.0), sqrt_n(n, 0.0), n_per_z(n, 0.0), disparity(n, 0.0);
   const PixelNormalizer normalized(in);
+  InverseDepthSums first;
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector2d r = normalized.OfIndex(region.pixels[k]);
     rays[k] = {r.x(), r.y(), 1.0};
-    if (k < pooled.size() && pooled[k].count > 0) {
-      weight[k] = pooled[k].count;
-      mean_m[k] = static_cast<double>(pooled[k].sum_counts) / pooled[k].count * units;
-      use[k] = mean_m[k] > 0;
-    }
-  }
-  const double fb = in.fx * p.baseline_m;
-  // What does not change from one plane to the next: the ground, √n, 1/√n, n/Z, f·B/Z.
-  std::vector<std::uint8_t> on_ground(n, 0);
-  std::vector<double> inv_sqrt_n(n, 0.0), sqrt_n(n, 0.0), n_per_z(n, 0.0), disparity(n, 0.0);
-  for (std::size_t k = 0; k < n; ++k) {
-    if (!use[k]) continue;
+    if (!(k < pooled.size() && pooled[k].count > 0)) continue;
+    weight[k] = pooled[k].count;
+    mean_m[k] = static_cast<double>(pooled[k].sum_counts) / pooled[k].count * units;
+    if (!(mean_m[k] > 0)) continue;
+    observed[k] = 1;
     sqrt_n[k] = std::sqrt(weight[k]);
     inv_sqrt_n[k] = 1.0 / sqrt_n[k];
     n_per_z[k] = weight[k] / mean_m[k];
     disparity[k] = fb / mean_m[k];
     on_ground[k] = ground && ground->Distance(mean_m[k] * rays[k]) < p.ground_distance_m;
+    first.Add(rays[k], 1.0, 1.0 / mean_m[k]);
   }
-  // ClassifyMeanDepth, with those precomputed.
+  out.plane_ok = first.Solve(&out.plane);
+  // ClassifyMeanDepth, with those precomputed, on the current plane's depth on each observed
+  // pixel's ray (computed once a plane; NaN on the others).
   const double k_sigma = p.sigma_k / (fb);
-  // The current plane's depth on each observed pixel's ray, computed once a plane.
   std::vector<double> plane_z(n, NAN);
-  auto on_plane_depths = [&] {
-    for (std::size_t k = 0; k < n; ++k)
-      if (use[k]) plane_z[k] = out.plane.DepthOnRay(rays[k]);
-  };
   auto classify = [&](std::size_t k) {
     if (on_ground[k]) return PixelClass::kGround;
     const double zp = plane_z[k];
@@ -170,31 +159,32 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
     if (zp - mean_m[k] > limit) return PixelClass::kInFront;
     return PixelClass::kOnPlane;
   };
-  // First plane: every observed pixel, each counted once (a textured background seen past the
-  // panel's edge gives many samples a pixel where a hole-ridden panel gives few: weighted by its
-  // samples, a strip of it would pull the first plane off the panel); then the pixels on it,
-  // each weighted by its samples, until they no longer change.
-  std::vector<double> ones(n, 1.0), inv_mean(n, 0.0);
-  for (std::size_t k = 0; k < n; ++k)
-    if (use[k]) inv_mean[k] = 1.0 / mean_m[k];
-  out.plane_ok = FitInverseDepthPlane(rays, inv_mean, ones, use, &out.plane);
-  const std::vector<std::uint8_t>& observed = use;
-  std::vector<std::uint8_t> on(n, 0), last;
-  std::vector<double> scratch;
-  scratch.reserve(n);
+  std::vector<std::uint8_t> on(n, 0);  // the pixels the current plane was fitted on
+  std::vector<double> residual;
+  residual.reserve(n);
   // plane_z stays that of out.plane wherever the loop ends: the classes below read it.
   for (int it = 0; out.plane_ok; ++it) {
-    on_plane_depths();
-    out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px,
-                                   ScatterPx(plane_z, disparity, sqrt_n, observed, fb, scratch));
+    residual.clear();
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!observed[k]) continue;
+      const double zp = out.plane.DepthOnRay(rays[k]);
+      plane_z[k] = zp;
+      if (std::isfinite(zp)) residual.push_back(std::fabs(disparity[k] - fb / zp) * sqrt_n[k]);
+    }
+    out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px, ScatterPx(residual));
     if (it == p.refit_iterations) break;
-    for (std::size_t k = 0; k < n; ++k)
-      on[k] = observed[k] && classify(k) == PixelClass::kOnPlane;
-    if (on == last) break;  // the refit would give the same plane and σ
+    bool changed = it == 0;
+    InverseDepthSums refit_sums;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint8_t now = observed[k] && classify(k) == PixelClass::kOnPlane;
+      changed = changed || now != on[k];
+      on[k] = now;
+      if (now) refit_sums.Add(rays[k], weight[k], n_per_z[k]);
+    }
+    if (!changed) break;  // the refit would give the same plane and σ
     Plane refit;
-    if (!FitInverseDepthPlane(rays, n_per_z, weight, on, &refit)) break;
+    if (!refit_sums.Solve(&refit)) break;
     out.plane = refit;
-    last = on;
   }
   out.pixels.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {

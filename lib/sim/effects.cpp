@@ -147,6 +147,19 @@ double Departures::DisparityAtTimePx(double time_s) const {
   return sum;
 }
 
+bool Departures::OnlyEmitter() const {
+  // Every field but emitter_gain, against its default (a field added to Departures is added here).
+  const Departures none;
+  return range_vs_depth_weight == none.range_vs_depth_weight &&
+         panel_yaw_deg == none.panel_yaw_deg && sigma_gain == none.sigma_gain &&
+         invalid_odds_gain == none.invalid_odds_gain && depth_scale == none.depth_scale &&
+         edge_mix_width_px == none.edge_mix_width_px &&
+         edge_mix_strength == none.edge_mix_strength &&
+         region_spill_px == none.region_spill_px &&
+         background_depth_rel == none.background_depth_rel && static_disparity.empty() &&
+         disparity_over_time.empty();
+}
+
 const std::vector<EffectInfo>& EffectRegistry() {
   static const std::vector<EffectInfo> registry = MakeRegistry();
   return registry;

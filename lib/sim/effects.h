@@ -34,6 +34,10 @@ struct Departures {
 
   double StaticDisparityPx(double xn, double yn) const;
   double DisparityAtTimePx(double time_s) const;
+  // True when nothing but emitter_gain departs from the base: a recording with the emitter off
+  // is then simulated exactly as without departures (emitter_gain is read for emitter-on
+  // recordings alone).
+  bool OnlyEmitter() const;
 };
 
 // One effect as the user names it: {name: disparity_offset, delta_px: 0.2}.

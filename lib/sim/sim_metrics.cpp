@@ -72,12 +72,9 @@ void WindowOnPlane(const metrics::Plane& plane, const metrics::PanelRectangle& t
 void RenderFrames(const StereoSim& sim, const PixelList& pixels, int frames,
                   std::vector<std::uint16_t>* out) {
   const std::size_t n = pixels.size();
-  out->assign(static_cast<std::size_t>(frames) * n, 0);
-  std::vector<std::uint16_t> counts;
-  for (int f = 0; f < frames; ++f) {
-    sim.RenderPixels(f, pixels, &counts);
-    std::copy(counts.begin(), counts.end(), out->begin() + static_cast<std::ptrdiff_t>(f * n));
-  }
+  out->resize(static_cast<std::size_t>(frames) * n);
+  for (int f = 0; f < frames; ++f)
+    sim.RenderPixels(f, pixels, out->data() + static_cast<std::size_t>(f) * n);
 }
 
 // The same for image pixels `image` (sorted; their list `pixels`), taking the counts of those
@@ -88,26 +85,26 @@ void RenderFramesReusing(const StereoSim& sim, const std::vector<std::uint32_t>&
                          const std::vector<std::uint16_t>& known_frames, int frames,
                          std::vector<std::uint16_t>* out) {
   const std::size_t n = image.size(), n_known = known.size();
-  std::vector<std::ptrdiff_t> from(n, -1);
+  std::vector<std::uint32_t> at, from;  // row[at[q]] = known_row[from[q]]
   PixelList missing;
   std::vector<std::size_t> missing_at;
   for (std::size_t k = 0, j = 0; k < n; ++k) {
     while (j < n_known && known[j] < image[k]) ++j;
     if (j < n_known && known[j] == image[k]) {
-      from[k] = static_cast<std::ptrdiff_t>(j);
+      at.push_back(static_cast<std::uint32_t>(k));
+      from.push_back(static_cast<std::uint32_t>(j));
     } else {
       missing.window.push_back(pixels.window[k]);
       missing.image.push_back(pixels.image[k]);
       missing_at.push_back(k);
     }
   }
-  out->assign(static_cast<std::size_t>(frames) * n, 0);
+  out->resize(static_cast<std::size_t>(frames) * n);
   std::vector<std::uint16_t> counts;
   for (int f = 0; f < frames; ++f) {
     std::uint16_t* row = out->data() + static_cast<std::size_t>(f) * n;
     const std::uint16_t* known_row = known_frames.data() + static_cast<std::size_t>(f) * n_known;
-    for (std::size_t k = 0; k < n; ++k)
-      if (from[k] >= 0) row[k] = known_row[from[k]];
+    for (std::size_t q = 0; q < at.size(); ++q) row[at[q]] = known_row[from[q]];
     if (missing.empty()) continue;
     sim.RenderPixels(f, missing, &counts);
     for (std::size_t q = 0; q < missing_at.size(); ++q) row[missing_at[q]] = counts[q];

@@ -88,24 +88,29 @@ std::vector<unsigned char> Dilate(const std::vector<unsigned char>& in, int w, i
   return out;
 }
 
-// Separable min or max filter of radius r.
-std::vector<float> Extreme(const std::vector<float>& in, int w, int h, int r, bool take_max) {
-  auto better = [take_max](float a, float b) { return take_max ? std::max(a, b) : std::min(a, b); };
-  std::vector<float> rows(in.size()), out(in.size());
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      float m = in[static_cast<size_t>(v) * w + u];
-      for (int du = std::max(0, u - r); du <= std::min(w - 1, u + r); ++du)
-        m = better(m, in[static_cast<size_t>(v) * w + du]);
-      rows[static_cast<size_t>(v) * w + u] = m;
+// Separable min or max filter of radius r. Each output starts from its own input and takes its
+// neighbours in ascending order (as a loop over them would); the loops over the neighbours'
+// offsets run outside those over the pixels, so that the pixels' are vectorized.
+template <bool kMax>
+std::vector<float> Extreme(const std::vector<float>& in, int w, int h, int r) {
+  auto better = [](float a, float b) { return kMax ? std::max(a, b) : std::min(a, b); };
+  std::vector<float> rows(in);
+  for (int v = 0; v < h; ++v) {
+    const float* const src = in.data() + static_cast<size_t>(v) * w;
+    float* const dst = rows.data() + static_cast<size_t>(v) * w;
+    for (int du = -r; du <= r; ++du) {
+      const int u_begin = std::max(0, -du), u_end = std::min(w, w - du);
+      for (int u = u_begin; u < u_end; ++u) dst[u] = better(dst[u], src[u + du]);
     }
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      float m = rows[static_cast<size_t>(v) * w + u];
-      for (int dv = std::max(0, v - r); dv <= std::min(h - 1, v + r); ++dv)
-        m = better(m, rows[static_cast<size_t>(dv) * w + u]);
-      out[static_cast<size_t>(v) * w + u] = m;
+  }
+  std::vector<float> out(rows);
+  for (int v = 0; v < h; ++v) {
+    float* const dst = out.data() + static_cast<size_t>(v) * w;
+    for (int dv = std::max(0, v - r); dv <= std::min(h - 1, v + r); ++dv) {
+      const float* const src = rows.data() + static_cast<size_t>(dv) * w;
+      for (int u = 0; u < w; ++u) dst[u] = better(dst[u], src[u]);
     }
+  }
   return out;
 }
 
@@ -396,8 +401,8 @@ void StereoSim::Build() {
   mix_delta_px_.clear();
   if (mixing_) {
     mix_delta_px_.assign(n, 0.f);
-    const std::vector<float> lo = Extreme(cast_->disparity, w, h, mix_w, false);
-    const std::vector<float> hi = Extreme(cast_->disparity, w, h, mix_w, true);
+    const std::vector<float> lo = Extreme<false>(cast_->disparity, w, h, mix_w);
+    const std::vector<float> hi = Extreme<true>(cast_->disparity, w, h, mix_w);
     for (size_t i = 0; i < n; ++i) {
       if (!surface_[i] || !(hi[i] > lo[i] * (1 + s.edge_jump_rel))) continue;
       const float d = disparity[i];
@@ -672,6 +677,12 @@ void StereoSim::Render(int frame_index, records::DepthFrame* frame, int threads)
 
 void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
                              std::vector<std::uint16_t>* counts) const {
+  counts->resize(pixels.window.size());
+  RenderPixels(frame_index, pixels, counts->data());
+}
+
+void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
+                             std::uint16_t* const out) const {
   const float offset = static_cast<float>(
       params_.departures.DisparityAtTimePx(frame_index / params_.protocol.fps));
   const Maps maps{static_disparity_px_->data(), mix_delta_px_.data(), valid_threshold_.data(),
@@ -682,8 +693,6 @@ void StereoSim::RenderPixels(int frame_index, const PixelList& pixels,
   const std::uint64_t frame_base = static_cast<std::uint64_t>(frame_index) *
                                    static_cast<std::uint64_t>(in.width) * in.height;
   const size_t n = pixels.window.size();
-  counts->resize(n);
-  std::uint16_t* const out = counts->data();
   const int* const window = pixels.window.data();
   const std::uint64_t* const image = pixels.image.data();
   const std::uint64_t seed = truth_.cell_seed;

@@ -245,6 +245,62 @@ TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
   EXPECT_THROW(SimulateDesign(p, d, {}, options), std::invalid_argument);
 }
 
+// The emitter's gain alone changes nothing with the emitter off: its nodes simulate the
+// emitter-on cells alone and take the base's for the others. Every node's table, in the metrics
+// no smoothing touches (smooth.h), is then what the whole table simulated at that gain gives,
+// bit for bit; and any other effect beside the gain does not take the shortcut (its departures
+// are not the emitter's alone).
+TEST(Simulations, AnEmitterGainNodeIsTheWholeTableSimulatedAtThatGain) {
+  sim::SimParams p;
+  p.sensor.fallback = {"", "", 0.08, 0.2};
+  p.seed = 23;
+  std::vector<records::PanelMetrics> rows;
+  for (double dist : {4.0, 12.0})
+    for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, 10, "HD", emitter));
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  std::vector<Candidate> gain;
+  ASSERT_TRUE(SelectCandidates("emitter_gain", &gain, &why)) << why;
+  SimulateOptions options;
+  options.frames = 4;
+  const Simulations s = SimulateDesign(p, d, gain, options);
+  ASSERT_EQ(s.surfaces.size(), 1u);
+  const Surface& surf = s.surfaces[0];
+  const int kk = d.num_metrics();
+  int compared = 0, moved = 0;
+  for (int node = 0; node < surf.num_nodes; ++node) {
+    sim::SimParams q = p;
+    ASSERT_TRUE(sim::BuildDepartures({SpecAt(gain[0], {gain[0].axes[0].nodes[node]})},
+                                     &q.departures, &why))
+        << why;
+    const std::vector<double> whole = SimulateValues({q}, d, options);
+    for (int c = 0; c < d.num_cells(); ++c)
+      for (int k = 0; k < kk; ++k) {
+        if (InfoOf(d.metrics[k]).window) continue;
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        const double v = surf.table[o * surf.num_nodes + node];
+        if (std::isnan(whole[o])) continue;
+        EXPECT_EQ(v, whole[o]) << d.cells[c].name << " " << InfoOf(d.metrics[k]).name
+                               << " gain " << gain[0].axes[0].nodes[node];
+        ++compared;
+        moved += d.cells[c].emitter_on && v != s.base[o];
+      }
+  }
+  EXPECT_GT(compared, 0);
+  EXPECT_GT(moved, 0) << "the gain moves the emitter-on cells";
+  sim::Departures both;
+  ASSERT_TRUE(sim::BuildDepartures({{"emitter_gain", {{"gain", 2.0}}}}, &both, &why)) << why;
+  EXPECT_TRUE(both.OnlyEmitter());
+  ASSERT_TRUE(sim::BuildDepartures({{"emitter_gain", {{"gain", 2.0}}}, {"panel_tilt", {}}},
+                                   &both, &why))
+      << why;
+  EXPECT_FALSE(both.OnlyEmitter());
+  sim::Departures offset;
+  ASSERT_TRUE(sim::BuildDepartures({{"disparity_offset", {}}}, &offset, &why)) << why;
+  EXPECT_FALSE(offset.OnlyEmitter());
+}
+
 // A simulation that reads every metric but the median bias as the real one (and the median bias
 // as 0): the median bias is the only gap.
 Simulations MedianBiasOnly(const Design& d) {
