@@ -59,3 +59,6 @@ printf '%-58s %9s %9s %s\n' "peer: simulate --metrics-only, 128 cells x 10 frame
   "$swall" "$scpu" "one of the $n_sims"
 over_two=$(bench_ratio "$cpu" 2)
 printf 'CPU time over 2 cores (an idle 2-core machine): %.1f s\n' "$over_two"
+# Every run, not only the best: a shared machine's speed can move by a quarter within an hour.
+every=$(printf '%s\n' "${runs[@]}" | cut -d' ' -f1 | paste -sd' ' -)
+printf 'diagnose_gap, every run, wall [s]: %s\n' "$every"

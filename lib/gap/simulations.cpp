@@ -184,9 +184,13 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
   }
 
   const size_t k_count = static_cast<size_t>(d.num_metrics());
+  // A node that departs from a base without departures by the emitter's gain alone changes no
+  // emitter-off cell (sim::Departures::OnlyEmitter): those are the base's, bit for bit, and only
+  // the emitter-on cells are simulated.
+  const bool base_plain = base.departures.OnlyEmitter();
   std::vector<char> emitter_on(d.cells.size(), 0);
   for (size_t c = 0; c < d.cells.size(); ++c) emitter_on[c] = d.cells[c].emitter_on;
-  if (std::find(emitter_on.begin(), emitter_on.end(), 1) == emitter_on.end()) emitter_on.clear();
+  const bool any_on = std::find(emitter_on.begin(), emitter_on.end(), 1) != emitter_on.end();
   for (const Candidate& cand : candidates) {
     Surface surf;
     surf.candidate = cand;
@@ -209,15 +213,16 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
         sim::SimParams p = base;
         if (!sim::BuildDepartures({SpecAt(cand, values)}, &p.departures, &why))
           throw std::invalid_argument("candidate " + cand.effect + ": " + why);
-        if (p.departures.OnlyEmitter() && !emitter_on.empty()) {
-          // The emitter's gain alone: the emitter-off cells are the base's, bit for bit.
+        if (base_plain && p.departures.OnlyEmitter()) {
           ++s.runs;
-          const std::vector<double> on = SimulateValues({p}, Subset(d, emitter_on), options);
           std::vector<double> all(s.base.begin(), s.base.end());
-          for (size_t c = 0, j = 0; c < d.cells.size(); ++c) {
-            if (!emitter_on[c]) continue;
-            for (size_t k = 0; k < k_count; ++k) all[c * k_count + k] = on[j * k_count + k];
-            ++j;
+          if (any_on) {
+            const std::vector<double> on = SimulateValues({p}, Subset(d, emitter_on), options);
+            for (size_t c = 0, j = 0; c < d.cells.size(); ++c) {
+              if (!emitter_on[c]) continue;
+              for (size_t k = 0; k < k_count; ++k) all[c * k_count + k] = on[j * k_count + k];
+              ++j;
+            }
           }
           v = std::move(all);
         } else {

@@ -34,9 +34,9 @@ struct Departures {
 
   double StaticDisparityPx(double xn, double yn) const;
   double DisparityAtTimePx(double time_s) const;
-  // True when nothing but emitter_gain departs from the base: a recording with the emitter off
-  // is then simulated exactly as without departures (emitter_gain is read for emitter-on
-  // recordings alone).
+  // True when every field but emitter_gain holds its default (no departure): a recording with
+  // the emitter off is then simulated exactly as with no departures at all (emitter_gain is read
+  // for emitter-on recordings alone).
   bool OnlyEmitter() const;
 };
 

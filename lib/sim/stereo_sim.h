@@ -81,7 +81,7 @@ class StereoSim {
   void RenderPixels(int frame_index, const PixelList& pixels,
                     std::vector<std::uint16_t>* counts) const;
   // The same into counts[0, pixels.size()).
-  void RenderPixels(int frame_index, const PixelList& pixels, std::uint16_t* counts) const;
+  void RenderPixels(int frame_index, const PixelList& pixels, std::uint16_t* out) const;
 
   // Window pixels that see the panel, and that still do after eroding it by margin_px.
   PixelList PanelPixels(int margin_px) const;
