@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "common/hash.h"
@@ -85,10 +86,17 @@ sim::SensorParams ListScenarios(const sim::SensorParams& sensor, const Design& d
   return out;
 }
 
-std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& d,
-                                   const SimulateOptions& options, std::vector<double>* depth_m) {
+namespace {
+
+// SimulateValues at each width of spills_px, or at the parameters' own width when it is empty.
+std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams>& params,
+                                                const Design& d, const SimulateOptions& options,
+                                                const std::vector<double>& spills_px,
+                                                std::vector<double>* depth_m) {
   const int k_count = d.num_metrics();
-  std::vector<double> out(static_cast<size_t>(d.num_cells()) * k_count, NAN);
+  const size_t widths = spills_px.empty() ? 1 : spills_px.size();
+  std::vector<std::vector<double>> out(
+      widths, std::vector<double>(static_cast<size_t>(d.num_cells()) * k_count, NAN));
   if (depth_m) depth_m->assign(d.cells.size(), NAN);
   sim::MetricsParams mp;
   mp.frames = options.frames;
@@ -112,17 +120,38 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
     if (cells.empty()) continue;
     sim::SimParams p = params[g];
     p.dither_quantization = options.dither_quantization;
-    const std::vector<sim::CellMetricsResult> r = sim::SimulateCellsMetrics(p, cells, mp);
-    for (int c = 0; c < d.num_cells(); ++c) {
-      const int i = index[c];
-      if (i < 0) continue;
-      if (depth_m) (*depth_m)[c] = r[i].truth.panel_depth_m;
-      if (!r[i].metrics.ok()) continue;
-      for (int k = 0; k < k_count; ++k)
-        out[static_cast<size_t>(c) * k_count + k] = MetricValue(r[i].metrics, d.metrics[k]);
+    const std::vector<std::vector<sim::CellMetricsResult>> by_width =
+        sim::SimulateCellsMetricsSpills(
+            p, cells, mp,
+            spills_px.empty() ? std::vector<double>{p.departures.region_spill_px} : spills_px);
+    for (size_t w = 0; w < widths; ++w) {
+      const std::vector<sim::CellMetricsResult>& r = by_width[w];
+      for (int c = 0; c < d.num_cells(); ++c) {
+        const int i = index[c];
+        if (i < 0) continue;
+        if (depth_m && w == 0) (*depth_m)[c] = r[i].truth.panel_depth_m;
+        if (!r[i].metrics.ok()) continue;
+        for (int k = 0; k < k_count; ++k)
+          out[w][static_cast<size_t>(c) * k_count + k] = MetricValue(r[i].metrics, d.metrics[k]);
+      }
     }
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& d,
+                                   const SimulateOptions& options, std::vector<double>* depth_m) {
+  return std::move(SimulateTables(params, d, options, {}, depth_m)[0]);
+}
+
+std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& params,
+                                                      const Design& d,
+                                                      const SimulateOptions& options,
+                                                      const std::vector<double>& spills_px) {
+  if (spills_px.empty()) return {};
+  return SimulateTables({params}, d, options, spills_px, nullptr);
 }
 
 Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
@@ -198,6 +227,8 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
     for (const Axis& a : cand.axes) shape.push_back(static_cast<int>(a.nodes.size()));
     surf.num_nodes = shape.size() == 1 ? shape[0] : shape[0] * shape[1];
     surf.table.assign(obs * surf.num_nodes, NAN);
+    // Each node's parameters (none: the base's values).
+    std::vector<std::optional<sim::SimParams>> at(surf.num_nodes);
     for (int node = 0; node < surf.num_nodes; ++node) {
       std::vector<double> values(shape.size());
       if (shape.size() == 1) {
@@ -206,30 +237,54 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
         values[0] = cand.axes[0].nodes[node / shape[1]];
         values[1] = cand.axes[1].nodes[node % shape[1]];
       }
-      std::vector<double> v;
-      if (IsNeutral(cand, values)) {
-        v = s.base;
-      } else {
-        sim::SimParams p = base;
-        if (!sim::BuildDepartures({SpecAt(cand, values)}, &p.departures, &why))
-          throw std::invalid_argument("candidate " + cand.effect + ": " + why);
-        if (base_plain && p.departures.OnlyEmitter()) {
-          ++s.runs;
-          std::vector<double> all(s.base.begin(), s.base.end());
-          if (any_on) {
-            const std::vector<double> on = SimulateValues({p}, Subset(d, emitter_on), options);
-            for (size_t c = 0, j = 0; c < d.cells.size(); ++c) {
-              if (!emitter_on[c]) continue;
-              for (size_t k = 0; k < k_count; ++k) all[c * k_count + k] = on[j * k_count + k];
-              ++j;
-            }
-          }
-          v = std::move(all);
-        } else {
-          v = run(p);
-        }
-      }
+      if (IsNeutral(cand, values)) continue;
+      sim::SimParams p = base;
+      if (!sim::BuildDepartures({SpecAt(cand, values)}, &p.departures, &why))
+        throw std::invalid_argument("candidate " + cand.effect + ": " + why);
+      at[node] = std::move(p);
+    }
+    auto store = [&](int node, const std::vector<double>& v) {
       for (size_t i = 0; i < obs; ++i) surf.table[i * surf.num_nodes + node] = v[i];
+    };
+    std::vector<char> done(surf.num_nodes, 0);
+    for (int node = 0; node < surf.num_nodes; ++node) {
+      if (done[node]) continue;
+      if (!at[node]) {
+        store(node, s.base);
+        continue;
+      }
+      const sim::SimParams& p = *at[node];
+      if (base_plain && p.departures.OnlyEmitter()) {
+        ++s.runs;
+        std::vector<double> all(s.base.begin(), s.base.end());
+        if (any_on) {
+          const std::vector<double> on = SimulateValues({p}, Subset(d, emitter_on), options);
+          for (size_t c = 0, j = 0; c < d.cells.size(); ++c) {
+            if (!emitter_on[c]) continue;
+            for (size_t k = 0; k < k_count; ++k) all[c * k_count + k] = on[j * k_count + k];
+            ++j;
+          }
+        }
+        store(node, all);
+        continue;
+      }
+      // The nodes that differ from this one by the drawn region's width alone are simulated
+      // with it (one sensor, footprint and plane per cell for all of them).
+      std::vector<int> group{node};
+      std::vector<double> spills{p.departures.region_spill_px};
+      for (int other = node + 1; other < surf.num_nodes; ++other)
+        if (!done[other] && at[other] && p.departures.SameButSpill(at[other]->departures)) {
+          group.push_back(other);
+          spills.push_back(at[other]->departures.region_spill_px);
+        }
+      const std::vector<std::vector<double>> tables =
+          group.size() == 1 ? std::vector<std::vector<double>>{run(p)}
+                            : SimulateValuesSpills(p, d, options, spills);
+      if (group.size() > 1) s.runs += static_cast<int>(group.size());
+      for (size_t g = 0; g < group.size(); ++g) {
+        store(group[g], tables[g]);
+        done[group[g]] = 1;
+      }
     }
     for (size_t i = 0; i < obs; ++i) FillGaps(shape, &surf.table[i * surf.num_nodes]);
     s.surfaces.push_back(std::move(surf));

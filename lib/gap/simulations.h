@@ -79,6 +79,14 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
                                    const SimulateOptions& options,
                                    std::vector<double>* depth_m = nullptr);
 
+// The same with one parameter set at each width of the region_spill effect (params' own width
+// is not read): [w] is SimulateValues({params with region_spill_px = spills_px[w]}). The widths
+// share each cell's sensor, footprint frames and measured plane (sim::SimulateMetricsSpills).
+std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& params,
+                                                      const Design& design,
+                                                      const SimulateOptions& options,
+                                                      const std::vector<double>& spills_px);
+
 // Monotone piecewise-cubic (Fritsch–Carlson) interpolation through (x[i], y[i]), x ascending,
 // t clamped to [x[0], x[n − 1]].
 double Pchip(const double* x, const double* y, int n, double t);

@@ -6,6 +6,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "common/select.h"
+
 namespace depthbias::metrics {
 namespace {
 
@@ -50,9 +52,7 @@ struct InverseDepthSums {
 // one sample.
 double ScatterPx(std::vector<double>& r) {
   if (r.empty()) return 0.0;
-  const std::size_t mid = r.size() / 2;
-  std::nth_element(r.begin(), r.begin() + mid, r.end());
-  return 1.4826 * r[mid];
+  return 1.4826 * common::NthSmallest(r, r.size() / 2);
 }
 
 }  // namespace

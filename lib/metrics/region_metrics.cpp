@@ -6,6 +6,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "common/select.h"
+
 namespace depthbias::metrics {
 namespace {
 
@@ -53,9 +55,8 @@ void Rebase(std::vector<std::uint64_t>* bins, std::size_t lo, std::size_t new_lo
 double Median(std::vector<double> v) {
   if (v.empty()) return records::PanelMetrics::kMissing;
   const std::size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + mid, v.end());
-  double m = v[mid];
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + mid));
+  double m = common::NthSmallest(v, mid);
+  if (v.size() % 2 == 0) m = 0.5 * (m + common::NthSmallest(v, mid - 1));
   return m;
 }
 

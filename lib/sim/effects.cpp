@@ -160,6 +160,17 @@ bool Departures::OnlyEmitter() const {
          disparity_over_time.empty();
 }
 
+bool Departures::SameButSpill(const Departures& o) const {
+  // Every field but region_spill_px (a field added to Departures is added here).
+  return range_vs_depth_weight == o.range_vs_depth_weight && panel_yaw_deg == o.panel_yaw_deg &&
+         sigma_gain == o.sigma_gain && invalid_odds_gain == o.invalid_odds_gain &&
+         emitter_gain == o.emitter_gain && depth_scale == o.depth_scale &&
+         edge_mix_width_px == o.edge_mix_width_px && edge_mix_strength == o.edge_mix_strength &&
+         background_depth_rel == o.background_depth_rel && static_disparity.empty() &&
+         o.static_disparity.empty() && disparity_over_time.empty() &&
+         o.disparity_over_time.empty();
+}
+
 const std::vector<EffectInfo>& EffectRegistry() {
   static const std::vector<EffectInfo> registry = MakeRegistry();
   return registry;

@@ -38,6 +38,10 @@ struct Departures {
   // the emitter off is then simulated exactly as with no departures at all (emitter_gain is read
   // for emitter-on recordings alone).
   bool OnlyEmitter() const;
+  // True when every field but region_spill_px holds the same value in both and neither has an
+  // additive disparity term (functions are not compared): the two then simulate alike up to the
+  // drawn region's width.
+  bool SameButSpill(const Departures& other) const;
 };
 
 // One effect as the user names it: {name: disparity_offset, delta_px: 0.2}.

@@ -85,14 +85,21 @@ void RenderFramesReusing(const StereoSim& sim, const std::vector<std::uint32_t>&
                          const std::vector<std::uint16_t>& known_frames, int frames,
                          std::vector<std::uint16_t>* out) {
   const std::size_t n = image.size(), n_known = known.size();
-  std::vector<std::uint32_t> at, from;  // row[at[q]] = known_row[from[q]]
+  // Runs of pixels in both lists: row[at + q] = known_row[from + q] for q < length.
+  struct Run {
+    std::size_t at, from, length;
+  };
+  std::vector<Run> runs;
   PixelList missing;
   std::vector<std::size_t> missing_at;
   for (std::size_t k = 0, j = 0; k < n; ++k) {
     while (j < n_known && known[j] < image[k]) ++j;
     if (j < n_known && known[j] == image[k]) {
-      at.push_back(static_cast<std::uint32_t>(k));
-      from.push_back(static_cast<std::uint32_t>(j));
+      if (!runs.empty() && runs.back().at + runs.back().length == k &&
+          runs.back().from + runs.back().length == j)
+        ++runs.back().length;
+      else
+        runs.push_back({k, j, 1});
     } else {
       missing.window.push_back(pixels.window[k]);
       missing.image.push_back(pixels.image[k]);
@@ -104,7 +111,7 @@ void RenderFramesReusing(const StereoSim& sim, const std::vector<std::uint32_t>&
   for (int f = 0; f < frames; ++f) {
     std::uint16_t* row = out->data() + static_cast<std::size_t>(f) * n;
     const std::uint16_t* known_row = known_frames.data() + static_cast<std::size_t>(f) * n_known;
-    for (std::size_t q = 0; q < at.size(); ++q) row[at[q]] = known_row[from[q]];
+    for (const Run& r : runs) std::copy_n(known_row + r.from, r.length, row + r.at);
     if (missing.empty()) continue;
     sim.RenderPixels(f, missing, &counts);
     for (std::size_t q = 0; q < missing_at.size(); ++q) row[missing_at[q]] = counts[q];
@@ -135,6 +142,89 @@ std::vector<metrics::PooledPixel> Pool(const std::vector<std::uint16_t>& frames_
   return pooled;
 }
 
+// The region drawn on result->window (grown by spill_px: region_spill), its frames (the
+// footprint's reused), the pixels its pooled frames decide (a drawn region, spill_px > 0, is not
+// decided) and the kernel's metrics of them, into *result.
+void MeasureRegion(const StereoSim& sim, const MetricsParams& mp, int frames, int pooled_frames,
+                   const metrics::Plane& ground, const metrics::PanelRegion& footprint,
+                   const std::vector<std::uint16_t>& footprint_frames, double spill_px,
+                   CellMetricsResult* result) {
+  const SensorParams& s = sim.params().sensor;
+  const auto& in = s.intrinsics;
+  records::PanelMetrics& m = result->metrics;
+  metrics::PanelRegion region;
+  PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region, &result->window, spill_px);
+  if (pixels.empty()) {
+    m.region_px = 0;
+    m.status = "no_panel";
+    m.message = "the panel's image region is empty";
+    return;
+  }
+  std::vector<std::uint16_t> stored;
+  RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
+                      pooled_frames, &stored);
+  if (!(spill_px > 0)) {  // a drawn region is not decided
+    const std::size_t n_px = pixels.size();
+    metrics::PanelPixels decided = metrics::DecidePanelPixels(
+        in, region, Pool(stored, n_px), s.depth_units_m, &ground, mp.region);
+    if (decided.excluded() > 0) {
+      // Keep the decided pixels' positions in the region, the stored frames and the pixel list.
+      std::vector<std::size_t> keep;
+      keep.reserve(decided.pixels.size());
+      for (std::size_t k = 0, j = 0; k < n_px && j < decided.pixels.size(); ++k)
+        if (region.pixels[k] == decided.pixels[j]) {
+          keep.push_back(k);
+          ++j;
+        }
+      PixelList kept;
+      kept.window.reserve(keep.size());
+      kept.image.reserve(keep.size());
+      for (std::size_t k : keep) {
+        kept.window.push_back(pixels.window[k]);
+        kept.image.push_back(pixels.image[k]);
+      }
+      std::vector<std::uint16_t> kept_stored(static_cast<std::size_t>(pooled_frames) *
+                                             keep.size());
+      for (int f = 0; f < pooled_frames; ++f)
+        for (std::size_t q = 0; q < keep.size(); ++q)
+          kept_stored[f * keep.size() + q] = stored[f * n_px + keep[q]];
+      pixels = std::move(kept);
+      stored.swap(kept_stored);
+      region.pixels.swap(decided.pixels);
+    }
+  }
+  result->region_px = static_cast<int>(pixels.size());
+  m.region_px = static_cast<double>(pixels.size());
+  if (pixels.empty()) {
+    m.status = "no_panel";
+    m.message = "no pixel of the panel's region shows the panel";
+    return;
+  }
+
+  // The frames' region pixels go through the metrics kernel, as panel_extract's do.
+  metrics::KernelParams kp;
+  kp.baseline_m = s.baseline_m;
+  kp.region_margin_px = mp.region_margin_px;
+  metrics::RegionMetrics kernel(in, region, kp);
+  std::vector<std::uint16_t> counts;
+  for (int k = 0; k < pooled_frames; ++k)
+    kernel.AddRegionCounts(stored.data() + static_cast<std::size_t>(k) * pixels.size(),
+                           s.depth_units_m);
+  for (int k = pooled_frames; k < frames; ++k) {
+    sim.RenderPixels(k, pixels, &counts);
+    kernel.AddRegionCounts(counts.data(), s.depth_units_m);
+  }
+  const metrics::KernelResult measured = kernel.Finish(-result->truth.panel.axis_height, &m);
+  if (!measured.success) {
+    m.status = "no_panel";
+    m.message = measured.message;
+    return;
+  }
+  if (!result->truth.scenario_listed)
+    m.message = "scenario " + result->metrics.light + "/" + result->metrics.preset +
+                " not in the sensor table: fallback noise and invalidation used";
+}
+
 }  // namespace
 
 bool MetricsParams::IsValid(std::string* why) const {
@@ -158,11 +248,14 @@ bool MetricsParams::IsValid(std::string* why) const {
   return true;
 }
 
-CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
-                                  const MetricsParams& mp) {
+std::vector<CellMetricsResult> SimulateMetricsSpills(const SimParams& params, const Cell& cell,
+                                                     const MetricsParams& mp,
+                                                     const std::vector<double>& spills_px) {
   std::string why;
   if (!mp.IsValid(&why)) throw std::invalid_argument("metrics parameters: " + why);
   if (!params.IsValid(&why)) throw std::invalid_argument("simulation parameters: " + why);
+  for (double spill : spills_px)
+    if (!(spill >= 0)) throw std::invalid_argument("region spill widths must be >= 0");
   const SensorParams& s = params.sensor;
   const auto& in = s.intrinsics;
   const int frames = mp.frames > 0 ? mp.frames : params.protocol.frames;
@@ -175,6 +268,8 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   m.preset = cell.preset;
   m.distance_m = cell.distance_m;
   m.angle_deg = cell.angle_deg;
+  // Every width alike, until the region is drawn.
+  auto all = [&]() { return std::vector<CellMetricsResult>(spills_px.size(), result); };
 
   // The window holds every pixel whose static maps the region's pixels depend on, and the
   // pixels the panel's window takes in when the range is under-read (kUnderReadCover).
@@ -184,7 +279,7 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   if (window.width == 0) {
     m.status = "no_panel";
     m.message = "the panel is not in front of the camera";
-    return result;
+    return all();
   }
   const StereoSim sim(params, cell, window);
   result.truth = sim.truth();
@@ -202,13 +297,15 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   const metrics::PanelRectangle true_rect = PanelRectangleOf(result.truth.panel);
   metrics::PanelRegion footprint;
   const PixelList footprint_px = sim.RectanglePixels(true_rect, mp.region_margin_px, &footprint);
-  auto no_panel = [&]() {
-    m.region_px = 0;
-    m.status = "no_panel";
-    m.message = "the panel's image region is empty";
-    return result;
+  auto no_panel = [](CellMetricsResult* r) {
+    r->metrics.region_px = 0;
+    r->metrics.status = "no_panel";
+    r->metrics.message = "the panel's image region is empty";
   };
-  if (footprint_px.empty()) return no_panel();
+  if (footprint_px.empty()) {
+    no_panel(&result);
+    return all();
+  }
   std::vector<std::uint16_t> footprint_frames;
   RenderFrames(sim, footprint_px, pooled_frames, &footprint_frames);
   const std::vector<metrics::PooledPixel> footprint_pooled =
@@ -240,73 +337,16 @@ CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
   metrics::PanelRectangle rect = true_rect;
   if (plane_ok) WindowOnPlane(measured_plane, true_rect, &rect);
   result.window = rect;
-  metrics::PanelRegion region;
-  PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region, &rect);
-  if (pixels.empty()) return no_panel();
-  std::vector<std::uint16_t> stored;
-  RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
-                      pooled_frames, &stored);
-  if (!(params.departures.region_spill_px > 0)) {  // a drawn region is not decided
-    const std::size_t n_px = pixels.size();
-    metrics::PanelPixels decided = metrics::DecidePanelPixels(
-        in, region, Pool(stored, n_px), s.depth_units_m, &ground, mp.region);
-    if (decided.excluded() > 0) {
-      // Keep the decided pixels' positions in the region, the stored frames and the pixel list.
-      std::vector<std::size_t> keep;
-      keep.reserve(decided.pixels.size());
-      for (std::size_t k = 0, j = 0; k < n_px && j < decided.pixels.size(); ++k)
-        if (region.pixels[k] == decided.pixels[j]) {
-          keep.push_back(k);
-          ++j;
-        }
-      PixelList kept;
-      kept.window.reserve(keep.size());
-      kept.image.reserve(keep.size());
-      for (std::size_t k : keep) {
-        kept.window.push_back(pixels.window[k]);
-        kept.image.push_back(pixels.image[k]);
-      }
-      std::vector<std::uint16_t> kept_stored(static_cast<std::size_t>(pooled_frames) *
-                                             keep.size());
-      for (int f = 0; f < pooled_frames; ++f)
-        for (std::size_t q = 0; q < keep.size(); ++q)
-          kept_stored[f * keep.size() + q] = stored[f * n_px + keep[q]];
-      pixels = std::move(kept);
-      stored.swap(kept_stored);
-      region.pixels.swap(decided.pixels);
-    }
-  }
-  result.region_px = static_cast<int>(pixels.size());
-  m.region_px = static_cast<double>(pixels.size());
-  if (pixels.empty()) {
-    m.status = "no_panel";
-    m.message = "no pixel of the panel's region shows the panel";
-    return result;
-  }
+  std::vector<CellMetricsResult> out = all();
+  for (std::size_t w = 0; w < spills_px.size(); ++w)
+    MeasureRegion(sim, mp, frames, pooled_frames, ground, footprint, footprint_frames,
+                  spills_px[w], &out[w]);
+  return out;
+}
 
-  // The frames' region pixels go through the metrics kernel, as panel_extract's do.
-  metrics::KernelParams kp;
-  kp.baseline_m = s.baseline_m;
-  kp.region_margin_px = mp.region_margin_px;
-  metrics::RegionMetrics kernel(in, region, kp);
-  std::vector<std::uint16_t> counts;
-  for (int k = 0; k < pooled_frames; ++k)
-    kernel.AddRegionCounts(stored.data() + static_cast<std::size_t>(k) * pixels.size(),
-                           s.depth_units_m);
-  for (int k = pooled_frames; k < frames; ++k) {
-    sim.RenderPixels(k, pixels, &counts);
-    kernel.AddRegionCounts(counts.data(), s.depth_units_m);
-  }
-  const metrics::KernelResult measured = kernel.Finish(-result.truth.panel.axis_height, &m);
-  if (!measured.success) {
-    m.status = "no_panel";
-    m.message = measured.message;
-    return result;
-  }
-  if (!result.truth.scenario_listed)
-    m.message = "scenario " + cell.light + "/" + cell.preset + " not in the sensor table: "
-                "fallback noise and invalidation used";
-  return result;
+CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
+                                  const MetricsParams& mp) {
+  return SimulateMetricsSpills(params, cell, mp, {params.departures.region_spill_px})[0];
 }
 
 std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
@@ -315,6 +355,20 @@ std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
   std::vector<CellMetricsResult> out(cells.size());
   common::ForEachIndex(cells.size(), metrics.threads,
                        [&](size_t i) { out[i] = SimulateMetrics(params, cells[i], metrics); });
+  return out;
+}
+
+std::vector<std::vector<CellMetricsResult>> SimulateCellsMetricsSpills(
+    const SimParams& params, const std::vector<Cell>& cells, const MetricsParams& metrics,
+    const std::vector<double>& spills_px) {
+  std::vector<std::vector<CellMetricsResult>> by_cell(cells.size());
+  common::ForEachIndex(cells.size(), metrics.threads, [&](size_t i) {
+    by_cell[i] = SimulateMetricsSpills(params, cells[i], metrics, spills_px);
+  });
+  std::vector<std::vector<CellMetricsResult>> out(spills_px.size(),
+                                                  std::vector<CellMetricsResult>(cells.size()));
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    for (std::size_t w = 0; w < spills_px.size(); ++w) out[w][i] = std::move(by_cell[i][w]);
   return out;
 }
 

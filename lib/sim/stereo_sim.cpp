@@ -729,8 +729,13 @@ metrics::PanelRectangle PanelRectangleOf(const PanelPose& pose) {
 
 PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out,
                                   const metrics::PanelRectangle* drawn) const {
-  return CachedRegionPixels(drawn ? *drawn : PanelRectangleOf(truth_.panel), margin_px,
-                            params_.departures.region_spill_px, region_out);
+  return RegionPixels(margin_px, region_out, drawn, params_.departures.region_spill_px);
+}
+
+PixelList StereoSim::RegionPixels(double margin_px, metrics::PanelRegion* region_out,
+                                  const metrics::PanelRectangle* drawn, double spill_px) const {
+  return CachedRegionPixels(drawn ? *drawn : PanelRectangleOf(truth_.panel), margin_px, spill_px,
+                            region_out);
 }
 
 PixelList StereoSim::RectanglePixels(const metrics::PanelRectangle& rect, double margin_px,
@@ -772,10 +777,19 @@ PixelList StereoSim::CachedRegionPixels(const metrics::PanelRectangle& rect, dou
 PixelList StereoSim::PixelsOfImage(std::vector<std::uint32_t>* image_pixels) const {
   const int width = params_.sensor.intrinsics.width;
   PixelList pixels;
+  pixels.window.reserve(image_pixels->size());
+  pixels.image.reserve(image_pixels->size());
   std::size_t kept = 0;
+  std::uint32_t row_start = 1, row_end = 0;  // [row_start, row_end): the image row of v
+  int v = 0;
   for (std::uint32_t i : *image_pixels) {
-    const int u = static_cast<int>(i % width) - window_.u0;
-    const int v = static_cast<int>(i / width) - window_.v0;
+    if (i < row_start || i >= row_end) {  // the pixels come row after row: one division a row
+      const std::uint32_t row = i / static_cast<std::uint32_t>(width);
+      row_start = row * static_cast<std::uint32_t>(width);
+      row_end = row_start + static_cast<std::uint32_t>(width);
+      v = static_cast<int>(row) - window_.v0;
+    }
+    const int u = static_cast<int>(i - row_start) - window_.u0;
     if (u < 0 || v < 0 || u >= window_.width || v >= window_.height) continue;
     pixels.window.push_back(v * window_.width + u);
     pixels.image.push_back(i);  // a pixel's index in the image is its draw's index in frame 0

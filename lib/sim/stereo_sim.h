@@ -90,6 +90,9 @@ class StereoSim {
   // region_spill effect, limited to the window; the region itself in *region when given.
   PixelList RegionPixels(double margin_px, metrics::PanelRegion* region = nullptr,
                          const metrics::PanelRectangle* rect = nullptr) const;
+  // The same grown by spill_px in place of the region_spill effect's width.
+  PixelList RegionPixels(double margin_px, metrics::PanelRegion* region,
+                         const metrics::PanelRectangle* rect, double spill_px) const;
   // The region of rect (metrics::RegionFromRectangle, not grown by region_spill), limited to the
   // window; the region itself in *region when given. Shared between simulations like
   // RegionPixels'.

@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 #include <random>
+#include <set>
 #include <stdexcept>
 
 #include "gap/candidates.h"
@@ -245,11 +246,55 @@ TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
   EXPECT_THROW(SimulateDesign(p, d, {}, options), std::invalid_argument);
 }
 
+// One candidate's surface over rows (seed p's, `frames` frames a cell), each node's table in the
+// metrics no smoothing touches (smooth.h) checked against the whole table simulated at that node
+// alone, bit for bit. Returns the (node values, cell) pairs that the node moves from the base.
+std::vector<std::pair<std::vector<double>, sim::Cell>> EveryNodeIsTheTableAlone(
+    const sim::SimParams& p, const std::vector<records::PanelMetrics>& rows,
+    const std::string& effect, int frames) {
+  std::vector<std::pair<std::vector<double>, sim::Cell>> moved;
+  Design d;
+  std::string why;
+  EXPECT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  std::vector<Candidate> cand;
+  EXPECT_TRUE(SelectCandidates(effect, &cand, &why)) << why;
+  if (cand.size() != 1) return moved;
+  SimulateOptions options;
+  options.frames = frames;
+  const Simulations s = SimulateDesign(p, d, cand, options);
+  EXPECT_EQ(s.surfaces.size(), 1u);
+  const Surface& surf = s.surfaces[0];
+  const std::vector<Axis>& axes = cand[0].axes;
+  const int kk = d.num_metrics(), last = static_cast<int>(axes.back().nodes.size());
+  int compared = 0;
+  for (int node = 0; node < surf.num_nodes; ++node) {
+    std::vector<double> values{axes[0].nodes[axes.size() == 1 ? node : node / last]};
+    if (axes.size() == 2) values.push_back(axes[1].nodes[node % last]);
+    if (IsNeutral(cand[0], values)) continue;
+    sim::SimParams q = p;
+    EXPECT_TRUE(sim::BuildDepartures({SpecAt(cand[0], values)}, &q.departures, &why)) << why;
+    const std::vector<double> whole = SimulateValues({q}, d, options);
+    for (int c = 0; c < d.num_cells(); ++c)
+      for (int k = 0; k < kk; ++k) {
+        if (InfoOf(d.metrics[k]).window) continue;
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        const double v = surf.table[o * surf.num_nodes + node];
+        if (std::isnan(whole[o])) continue;  // a gap of the grid, filled from a neighbour
+        EXPECT_EQ(v, whole[o]) << d.cells[c].name << " " << InfoOf(d.metrics[k]).name << " "
+                               << effect << " node " << node;
+        ++compared;
+        if (v != s.base[o]) moved.push_back({values, d.cells[c]});
+      }
+  }
+  EXPECT_GT(compared, 0);
+  return moved;
+}
+
 // The emitter's gain alone changes nothing with the emitter off: its nodes simulate the
-// emitter-on cells alone and take the base's for the others. Every node's table, in the metrics
-// no smoothing touches (smooth.h), is then what the whole table simulated at that gain gives,
-// bit for bit (a recording listed twice included); and every other registered effect, alone or
-// beside the gain, does not take the shortcut (its departures are not the emitter's alone).
+// emitter-on cells alone and take the base's for the others. Every node's table is then what
+// the whole table simulated at that gain gives (a recording listed twice included); and every
+// other registered effect, alone or beside the gain, does not take the shortcut (its departures
+// are not the emitter's alone).
 TEST(Simulations, AnEmitterGainNodeIsTheWholeTableSimulatedAtThatGain) {
   sim::SimParams p;
   p.sensor.fallback = {"", "", 0.08, 0.2};
@@ -258,38 +303,11 @@ TEST(Simulations, AnEmitterGainNodeIsTheWholeTableSimulatedAtThatGain) {
   for (double dist : {4.0, 12.0})
     for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, 10, "HD", emitter));
   rows.insert(rows.begin() + 1, Row(12, 10, "HD", "on"));  // listed twice, out of order
-  Design d;
+  const auto moved = EveryNodeIsTheTableAlone(p, rows, "emitter_gain", 4);
+  EXPECT_FALSE(moved.empty()) << "the gain moves the emitter-on cells";
+  for (const auto& [values, cell] : moved)
+    EXPECT_TRUE(cell.emitter_on) << cell.name << " moved by gain " << values[0];
   std::string why;
-  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
-  std::vector<Candidate> gain;
-  ASSERT_TRUE(SelectCandidates("emitter_gain", &gain, &why)) << why;
-  SimulateOptions options;
-  options.frames = 4;
-  const Simulations s = SimulateDesign(p, d, gain, options);
-  ASSERT_EQ(s.surfaces.size(), 1u);
-  const Surface& surf = s.surfaces[0];
-  const int kk = d.num_metrics();
-  int compared = 0, moved = 0;
-  for (int node = 0; node < surf.num_nodes; ++node) {
-    sim::SimParams q = p;
-    ASSERT_TRUE(sim::BuildDepartures({SpecAt(gain[0], {gain[0].axes[0].nodes[node]})},
-                                     &q.departures, &why))
-        << why;
-    const std::vector<double> whole = SimulateValues({q}, d, options);
-    for (int c = 0; c < d.num_cells(); ++c)
-      for (int k = 0; k < kk; ++k) {
-        if (InfoOf(d.metrics[k]).window) continue;
-        const size_t o = static_cast<size_t>(c) * kk + k;
-        const double v = surf.table[o * surf.num_nodes + node];
-        if (std::isnan(whole[o])) continue;  // a gap of the grid, filled from a neighbour
-        EXPECT_EQ(v, whole[o]) << d.cells[c].name << " " << InfoOf(d.metrics[k]).name
-                               << " gain " << gain[0].axes[0].nodes[node];
-        ++compared;
-        moved += d.cells[c].emitter_on && v != s.base[o];
-      }
-  }
-  EXPECT_GT(compared, 0);
-  EXPECT_GT(moved, 0) << "the gain moves the emitter-on cells";
   sim::Departures both;
   ASSERT_TRUE(sim::BuildDepartures({{"emitter_gain", {{"gain", 2.0}}}}, &both, &why)) << why;
   EXPECT_TRUE(both.OnlyEmitter());
@@ -302,6 +320,42 @@ TEST(Simulations, AnEmitterGainNodeIsTheWholeTableSimulatedAtThatGain) {
     sim::Departures other;
     ASSERT_TRUE(sim::BuildDepartures({{e.name, {}}}, &other, &why)) << why;
     EXPECT_FALSE(other.OnlyEmitter()) << e.name << " at its defaults";
+  }
+}
+
+// region_spill's widths at one background are simulated together (sim::SimulateMetricsSpills:
+// one sensor, footprint and plane a cell for all of them). Every node's table is what the whole
+// table simulated at that width and background alone gives (a recording listed twice included);
+// two sets of departures are grouped only when they differ by the width alone.
+TEST(Simulations, ARegionSpillNodeIsTheWholeTableSimulatedAtThatWidth) {
+  sim::SimParams p;
+  p.sensor.fallback = {"", "", 0.1, 0.2};
+  p.seed = 29;
+  const std::vector<records::PanelMetrics> rows{Row(16, 20, "HD", "on"), Row(4, 0, "HA", "off"),
+                                                Row(16, 20, "HD", "on"), Row(8, 35, "HA", "on")};
+  std::set<double> widths_apart;  // the widths that move a metric from the base's
+  for (const auto& [values, cell] : EveryNodeIsTheTableAlone(p, rows, "region_spill", 3))
+    widths_apart.insert(values[0]);
+  EXPECT_EQ(widths_apart.size(), 5u) << "each width draws a region of its own";
+  std::string why;
+  sim::Departures a, b;
+  ASSERT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", 1}, {"background_rel", 2}}}},
+                                   &a, &why))
+      << why;
+  ASSERT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", 4}, {"background_rel", 2}}}},
+                                   &b, &why))
+      << why;
+  EXPECT_TRUE(a.SameButSpill(b));
+  ASSERT_TRUE(sim::BuildDepartures({{"region_spill", {{"width_px", 4}, {"background_rel", 3}}}},
+                                   &b, &why))
+      << why;
+  EXPECT_FALSE(a.SameButSpill(b)) << "another background";
+  for (const sim::EffectInfo& e : sim::EffectRegistry()) {
+    if (e.name == "region_spill") continue;
+    ASSERT_TRUE(sim::BuildDepartures(
+        {{"region_spill", {{"width_px", 4}, {"background_rel", 2}}}, {e.name, {}}}, &b, &why))
+        << why;
+    EXPECT_FALSE(a.SameButSpill(b)) << e.name << " at its defaults beside the spill";
   }
 }
 

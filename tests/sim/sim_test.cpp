@@ -2,8 +2,12 @@
 // base model against its formulas, and every effect against its signature.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
+#include <set>
 
+#include "common/select.h"
 #include "sim/effects.h"
 #include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
@@ -393,6 +397,66 @@ TEST(StereoSim, RefusesInvalidParameters) {
   MetricsParams mp;
   mp.region_margin_px = -1;
   EXPECT_THROW(SimulateMetrics(Base(), MakeCell(4, 0), mp), std::invalid_argument);
+}
+
+// Widths of region_spill simulated together (one sensor, footprint and plane a recording) give
+// each width's metrics alone, bit for bit, in any order, a width twice and width 0 (the decided
+// region) among them.
+TEST(StereoSim, SpillWidthsTogetherAreEachWidthAlone) {
+  const SimParams base = Base(0.1, 0.2, 4);
+  using M = records::PanelMetrics;
+  constexpr double M::*kColumns[] = {
+      &M::frames,        &M::mean_m,         &M::median_m,      &M::plane_std_m,
+      &M::hole_rate_pct, &M::valid_pct,      &M::range_m,       &M::azimuth_deg,
+      &M::elevation_deg, &M::normal_tilt_deg, &M::panel_width_m, &M::panel_height_m,
+      &M::region_px,     &M::subpixel_rms_px, &M::temporal_std_m, &M::sigma_d_px};
+  const std::vector<double> widths{3, 0, 5, 1, 3};
+  MetricsParams mp;
+  mp.threads = 2;
+  for (const Cell& c : {MakeCell(4, 0), MakeCell(16, 35, "HD", true), MakeCell(8, 20, "HA", true)}) {
+    const SimParams at = With(base, {{"region_spill", {{"width_px", 1}, {"background_rel", 1.5}}}});
+    const std::vector<CellMetricsResult> together = SimulateMetricsSpills(at, c, mp, widths);
+    ASSERT_EQ(together.size(), widths.size());
+    std::set<double> region_sizes;
+    for (size_t w = 0; w < widths.size(); ++w) {
+      const CellMetricsResult alone = SimulateMetrics(
+          With(base, {{"region_spill", {{"width_px", widths[w]}, {"background_rel", 1.5}}}}), c,
+          mp);
+      const M &a = together[w].metrics, &b = alone.metrics;
+      ASSERT_TRUE(b.ok()) << c.name << ": " << b.message;
+      EXPECT_EQ(a.status, b.status);
+      EXPECT_EQ(a.message, b.message);
+      for (double M::*col : kColumns)
+        EXPECT_TRUE(a.*col == b.*col || (std::isnan(a.*col) && std::isnan(b.*col)))
+            << c.name << " width " << widths[w] << ": " << a.*col << " against " << b.*col;
+      EXPECT_EQ(together[w].truth.panel_depth_m, alone.truth.panel_depth_m);
+      region_sizes.insert(a.region_px);
+    }
+    EXPECT_EQ(region_sizes.size(), 4u) << c.name << ": four widths, four regions";
+  }
+  EXPECT_THROW(SimulateMetricsSpills(base, MakeCell(4, 0), mp, {1, -1}), std::invalid_argument);
+}
+
+// The k-th smallest by radix selection is std::nth_element's, on values with ties, zeros,
+// infinities and subnormals, and (by nth_element itself) on negative values.
+TEST(NthSmallest, IsWhatNthElementLeavesAtK) {
+  std::mt19937_64 rng(97);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (size_t n : {1, 7, 256, 257, 1000, 4099, 30000})
+    for (int kind = 0; kind < 4; ++kind) {
+      std::vector<double> v(n);
+      for (double& x : v) {
+        x = kind == 0   ? u(rng)
+            : kind == 1 ? std::floor(u(rng) * 5) * 0.25  // ties and zeros
+            : kind == 2 ? (u(rng) < 0.01 ? INFINITY : u(rng) < 0.01 ? 5e-320 : u(rng) * 1e-3)
+                        : u(rng) - 0.5;  // negative values
+      }
+      for (size_t k : {size_t{0}, n / 2, n - 1, n / 3}) {
+        std::vector<double> a = v, b = v;
+        std::nth_element(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(k), a.end());
+        EXPECT_EQ(common::NthSmallest(b, k), a[k]) << "n " << n << " kind " << kind << " k " << k;
+      }
+    }
 }
 
 TEST(StereoSim, ProtocolHasTheArticlesCellsInParallelOrNot) {
