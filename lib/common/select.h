@@ -12,11 +12,11 @@
 
 namespace depthbias::common {
 
-// The k-th smallest (0-based, k < v.size()) of v; v is reordered. When every value is a
-// non-negative number or +inf (no sign bit, no NaN), their bit patterns order as the values
-// do, and a radix selection on them (11 bits at a time, from the top) narrows the candidates
-// in a few passes without a comparison that branches; otherwise, and on the last few
-// candidates, std::nth_element. The same value std::nth_element gives in either case.
+// The k-th smallest (0-based, k < v.size()) of v; v may be reordered. When every value is a
+// non-negative number or +inf (no sign bit, so no −0; no NaN), their bit patterns order as the
+// values do, and a radix selection on them (11 bits at a time from the top, the last 9)
+// narrows the candidates in a few passes without a comparison that branches; otherwise, and on
+// the last few candidates, std::nth_element. The same value std::nth_element gives either way.
 inline double NthSmallest(std::vector<double>& v, std::size_t k) {
   const std::size_t n = v.size();
   constexpr std::size_t kSmall = 256;  // fewer candidates: std::nth_element

@@ -80,7 +80,7 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
                                    std::vector<double>* depth_m = nullptr);
 
 // The same with one parameter set at each width of the region_spill effect (params' own width
-// is not read): [w] is SimulateValues({params with region_spill_px = spills_px[w]}). The widths
+// is not used): [w] is SimulateValues({params with region_spill_px = spills_px[w]}). The widths
 // share each cell's sensor, footprint frames and measured plane (sim::SimulateMetricsSpills).
 std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& params,
                                                       const Design& design,

@@ -46,10 +46,10 @@ std::vector<CellMetricsResult> SimulateCellsMetrics(const SimParams& params,
                                                     const std::vector<Cell>& cells,
                                                     const MetricsParams& metrics = {});
 
-// One recording simulated at several widths of the region_spill effect (params' own width is
-// not read): result w is SimulateMetrics' with departures.region_spill_px = spills_px[w]. The
-// width moves the drawn region alone, so the sensor, the footprint's frames and the measured
-// plane are made once for all of them.
+// One recording simulated at several widths of the region_spill effect (params' own width, valid
+// as ever, is not used): result w is SimulateMetrics' with departures.region_spill_px =
+// spills_px[w] (each >= 0, else std::invalid_argument). The width moves the drawn region alone,
+// so the sensor, the footprint's frames and the measured plane are made once for all of them.
 std::vector<CellMetricsResult> SimulateMetricsSpills(const SimParams& params, const Cell& cell,
                                                      const MetricsParams& metrics,
                                                      const std::vector<double>& spills_px);

@@ -350,12 +350,20 @@ TEST(Simulations, ARegionSpillNodeIsTheWholeTableSimulatedAtThatWidth) {
                                    &b, &why))
       << why;
   EXPECT_FALSE(a.SameButSpill(b)) << "another background";
+  // Every other effect beside the spill, and each of its parameters moved alone: never the same.
   for (const sim::EffectInfo& e : sim::EffectRegistry()) {
     if (e.name == "region_spill") continue;
-    ASSERT_TRUE(sim::BuildDepartures(
-        {{"region_spill", {{"width_px", 4}, {"background_rel", 2}}}, {e.name, {}}}, &b, &why))
-        << why;
-    EXPECT_FALSE(a.SameButSpill(b)) << e.name << " at its defaults beside the spill";
+    const sim::EffectSpec spill{"region_spill", {{"width_px", 4}, {"background_rel", 2}}};
+    sim::Departures at_defaults;
+    ASSERT_TRUE(sim::BuildDepartures({spill, {e.name, {}}}, &at_defaults, &why)) << why;
+    EXPECT_FALSE(a.SameButSpill(at_defaults)) << e.name << " at its defaults beside the spill";
+    for (const sim::EffectParamInfo& param : e.params) {
+      const double moved =
+          param.default_value != param.max_value ? param.max_value : param.min_value;
+      ASSERT_TRUE(sim::BuildDepartures({spill, {e.name, {{param.name, moved}}}}, &b, &why))
+          << why;
+      EXPECT_FALSE(at_defaults.SameButSpill(b)) << e.name << "'s " << param.name << " moved";
+    }
   }
 }
 

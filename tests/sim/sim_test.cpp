@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <set>
 
@@ -438,18 +439,27 @@ TEST(StereoSim, SpillWidthsTogetherAreEachWidthAlone) {
 }
 
 // The k-th smallest by radix selection is std::nth_element's, on values with ties, zeros,
-// infinities and subnormals, and (by nth_element itself) on negative values.
+// infinities and subnormals, values apart in their last bits alone (the last, 9-bit pass), and
+// (by nth_element itself) on negative values and −0.
 TEST(NthSmallest, IsWhatNthElementLeavesAtK) {
   std::mt19937_64 rng(97);
   std::uniform_real_distribution<double> u(0, 1);
   for (size_t n : {1, 7, 256, 257, 1000, 4099, 30000})
-    for (int kind = 0; kind < 4; ++kind) {
+    for (int kind = 0; kind < 6; ++kind) {
       std::vector<double> v(n);
       for (double& x : v) {
+        std::uint64_t bits;
+        const double one = 1.0;
+        std::memcpy(&bits, &one, sizeof bits);
+        bits += rng() % 300;  // 1 + up to 299 ulps: the top 55 bits shared
+        double ulps;
+        std::memcpy(&ulps, &bits, sizeof bits);
         x = kind == 0   ? u(rng)
             : kind == 1 ? std::floor(u(rng) * 5) * 0.25  // ties and zeros
             : kind == 2 ? (u(rng) < 0.01 ? INFINITY : u(rng) < 0.01 ? 5e-320 : u(rng) * 1e-3)
-                        : u(rng) - 0.5;  // negative values
+            : kind == 3 ? u(rng) - 0.5    // negative values
+            : kind == 4 ? (u(rng) < 0.1 ? -0.0 : u(rng))
+                        : ulps;
       }
       for (size_t k : {size_t{0}, n / 2, n - 1, n / 3}) {
         std::vector<double> a = v, b = v;
