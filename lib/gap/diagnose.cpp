@@ -443,6 +443,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
     GapModel at_phi = model;  // the selection's dispersion
     at_phi.SetDispersion(r.dispersion);
     r.size_spread = SpreadOverFolds(at_phi, fold, r.folds, &r.selected);
+    ProfileDiscreteAxes(at_phi, all, &r.selected);
     // The shares an effect must remove, of the gaps the keep rule reads (above): each outer
     // fold's calibrated base simulated on its held-out cells, or the table's calibrated gap
     // without the nested hold-out.

@@ -74,8 +74,11 @@ struct Term {
 struct TermFit {
   Term term;
   std::vector<std::vector<double>> values;  // [group][axis], natural units
-  std::vector<std::vector<double>> ci_lo;   // 95 % interval [group][axis] (discrete: the value)
+  // 95 % interval [group][axis]; a discrete axis: its value, or where `profiled`, the hull of
+  // the nodes its profile over the nodes keeps (the diagnosis's selected terms).
+  std::vector<std::vector<double>> ci_lo;
   std::vector<std::vector<double>> ci_hi;
+  bool profiled = false;
   // The value sits on the grid's edge short of the parameter's own bound (where the data would
   // take it further than was simulated: not determined). At a bound of the registry's (a gain
   // of 0, a weight of 1) the value is the bound: determined, its interval clipped to it.
@@ -185,6 +188,14 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
 // scenario).
 ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
                       const std::vector<char>& train, const ModelFit* shared = nullptr);
+
+// The 95 % interval of each discrete axis of the fitted terms (a width, fitted at one node): the
+// hull of the nodes whose refit, every other parameter and the calibration free, raises the
+// deviance by at most χ²₁(0.95) = 3.84 over the refit at the node fitted (a profile likelihood
+// over the nodes; a continuous axis's interval comes from the fit's curvature). Each refit starts
+// from the fit's values and from the grid's reference values, and keeps the lower deviance.
+// Marks the terms `profiled`; a group without cells keeps its value.
+void ProfileDiscreteAxes(const GapModel& model, const std::vector<char>& cells, ModelFit* fit);
 
 // Held-out predictions: each fold's cells predicted by the terms refitted on the other cells
 // (single candidates by FitCandidate, so their discrete nodes are chosen without the fold;

@@ -160,6 +160,51 @@ ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
   return best;
 }
 
+void ProfileDiscreteAxes(const GapModel& model, const std::vector<char>& cells,
+                         ModelFit* fit) {  // fit.h
+  constexpr double kChi2_95 = 3.841459;
+  std::vector<Term> terms;
+  for (const TermFit& t : fit->terms) terms.push_back(t.term);
+  auto refit = [&](const std::vector<Term>& with) {
+    double best = INFINITY;
+    for (const ModelFit* start : {static_cast<const ModelFit*>(fit),
+                                  static_cast<const ModelFit*>(nullptr)}) {
+      const ModelFit f = FitTerms(model, with, cells, start);
+      if (f.success) best = std::min(best, f.Deviance());
+    }
+    return best;
+  };
+  const double at_node = refit(terms);
+  if (!std::isfinite(at_node)) return;
+  for (size_t i = 0; i < terms.size(); ++i) {
+    TermFit& tf = fit->terms[i];
+    const Candidate& cand = model.surface(tf.term.candidate).candidate;
+    for (size_t a = 0; a < cand.axes.size(); ++a) {
+      if (!cand.axes[a].discrete) continue;
+      const std::vector<double>& nodes = cand.axes[a].nodes;
+      for (size_t g = 0; g < tf.values.size(); ++g) {
+        if (g < tf.group_used.size() && !tf.group_used[g]) continue;
+        const int fitted = tf.term.Discrete(static_cast<int>(g), static_cast<int>(a));
+        if (fitted < 0) continue;
+        double lo = nodes[fitted], hi = nodes[fitted];
+        for (int j = 0; j < static_cast<int>(nodes.size()); ++j) {
+          if (nodes[j] >= lo && nodes[j] <= hi) continue;
+          std::vector<Term> moved = terms;
+          Term& m = moved[i];
+          if (m.discrete_node.size() == 1 && tf.values.size() > 1)
+            m.discrete_node.assign(tf.values.size(), m.discrete_node[0]);
+          m.discrete_node[m.discrete_node.size() == 1 ? 0 : g][a] = j;
+          if (refit(moved) - at_node <= kChi2_95)
+            lo = std::min(lo, nodes[j]), hi = std::max(hi, nodes[j]);
+        }
+        tf.ci_lo[g][a] = lo;
+        tf.ci_hi[g][a] = hi;
+        tf.profiled = true;
+      }
+    }
+  }
+}
+
 HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
                       const std::vector<int>& fold, int num_folds, const ModelFit& full,
                       const std::vector<char>& use) {

@@ -170,7 +170,8 @@ std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
         continue;
       }
       s += (s.empty() ? "" : ", ") + c.axes[a].param + " " + Num(t.values[g][a]);
-      if (with_ci && !c.axes[a].discrete && std::isfinite(t.ci_lo[g][a]))
+      if (((with_ci && !c.axes[a].discrete) || (c.axes[a].discrete && t.profiled)) &&
+          std::isfinite(t.ci_lo[g][a]))
         s += " [" + Num(t.ci_lo[g][a]) + ", " + Num(t.ci_hi[g][a]) + "]";
       if (t.at_bound[g][a]) s += " (grid edge)";
     }
@@ -262,6 +263,7 @@ std::string Headline(const DiagnoseResult& r) {
       for (const SizeSpread& g : spread) checked += g.checked, widened += g.checked && g.widened;
       o << (i ? ";" : "") << " " << r.candidates[t.term.candidate].effect << " ("
         << ParamsText(r, t, checked > 0, true);
+      if (checked == 0 && t.profiled) o << ", the width's 95 % interval";
       if (checked > 0) {
         o << ", 95 %";
         const SizeSpread& sp = spread[0];

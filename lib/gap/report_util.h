@@ -29,8 +29,8 @@ inline std::string Pct(double v) {
 }
 
 // A term's parameters: "p v, q w" (per scenario "S: …; T: …"), with 95 % intervals and a
-// "(grid edge)" mark on request; with hide_edges a value on the grid's edge is not given (it is
-// no measurement) but said to be there.
+// "(grid edge)" mark on request (a discrete axis's profiled interval always); with hide_edges a
+// value on the grid's edge is not given (it is no measurement) but said to be there.
 std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
                        bool hide_edges = false);
 

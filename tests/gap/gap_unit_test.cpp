@@ -47,6 +47,25 @@ records::PanelMetrics Row(double d, double a, const std::string& preset, const s
   return r;
 }
 
+// A sensor that lists no scenario (every cell takes the fallback's σ_d and hole probability), at
+// a seed.
+sim::SimParams FallbackSensor(std::uint64_t seed, double invalid_prob = 0.2,
+                              double sigma_d_px = 0.08) {
+  sim::SimParams p;
+  p.sensor.fallback = {"", "", sigma_d_px, invalid_prob};
+  p.seed = seed;
+  return p;
+}
+
+// Each distance's emitter-off and emitter-on rows, at one angle and preset, in daylight.
+std::vector<records::PanelMetrics> Twins(std::initializer_list<double> distances, double angle,
+                                         const std::string& preset) {
+  std::vector<records::PanelMetrics> rows;
+  for (double dist : distances)
+    for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, angle, preset, emitter));
+  return rows;
+}
+
 std::vector<records::PanelMetrics> Table() {
   std::vector<records::PanelMetrics> rows;
   for (const char* light : {"daylight", "sunset"})
@@ -212,12 +231,8 @@ TEST(Noise, TheSimulationsOwnScatterAddsInQuadrature) {
 // decides, stays within two steps of its quantization at 35° off axis (ten pixels move it
 // 17 mm at 4 m, past the 11 mm of two steps); with shift_px 0 there is no such run.
 TEST(Simulations, TheShiftedBaseMovesPanelsByLessThanAPixel) {
-  sim::SimParams p;
-  p.sensor.fallback = {"", "", 0.08, 0.2};
-  p.seed = 11;
-  std::vector<records::PanelMetrics> rows;
-  for (double dist : {4.0, 16.0})
-    for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, 35, "HA", emitter));
+  const sim::SimParams p = FallbackSensor(11);
+  const std::vector<records::PanelMetrics> rows = Twins({4, 16}, 35, "HA");
   Design d;
   std::string why;
   ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
@@ -296,12 +311,8 @@ std::vector<std::pair<std::vector<double>, sim::Cell>> EveryNodeIsTheTableAlone(
 // other registered effect, alone or beside the gain, does not take the shortcut (its departures
 // are not the emitter's alone).
 TEST(Simulations, AnEmitterGainNodeIsTheWholeTableSimulatedAtThatGain) {
-  sim::SimParams p;
-  p.sensor.fallback = {"", "", 0.08, 0.2};
-  p.seed = 23;
-  std::vector<records::PanelMetrics> rows;
-  for (double dist : {4.0, 12.0})
-    for (const char* emitter : {"off", "on"}) rows.push_back(Row(dist, 10, "HD", emitter));
+  const sim::SimParams p = FallbackSensor(23);
+  std::vector<records::PanelMetrics> rows = Twins({4, 12}, 10, "HD");
   rows.insert(rows.begin() + 1, Row(12, 10, "HD", "on"));  // listed twice, out of order
   const auto moved = EveryNodeIsTheTableAlone(p, rows, "emitter_gain", 4);
   EXPECT_FALSE(moved.empty()) << "the gain moves the emitter-on cells";
@@ -328,9 +339,7 @@ TEST(Simulations, AnEmitterGainNodeIsTheWholeTableSimulatedAtThatGain) {
 // table simulated at that width and background alone gives (a recording listed twice included);
 // two sets of departures are grouped only when they differ by the width alone.
 TEST(Simulations, ARegionSpillNodeIsTheWholeTableSimulatedAtThatWidth) {
-  sim::SimParams p;
-  p.sensor.fallback = {"", "", 0.1, 0.2};
-  p.seed = 29;
+  const sim::SimParams p = FallbackSensor(29, 0.2, 0.1);
   const std::vector<records::PanelMetrics> rows{Row(16, 20, "HD", "on"), Row(4, 0, "HA", "off"),
                                                 Row(16, 20, "HD", "on"), Row(8, 35, "HA", "on")};
   std::set<double> widths_apart;  // the widths that move a metric from the base's
@@ -1003,6 +1012,89 @@ TEST(Scope, AWiderFitMustBeatTheSimplerByOneStandardError) {
   EXPECT_FALSE(BeatsByOneSe(model, one, simpler));
 }
 
+// A discrete width's interval (ProfileDiscreteAxes) on region_spill's grid (width 0 to 5 px
+// discrete, background 1.3 to 3.6 continuous) with surfaces made here, in the median bias alone,
+// over the placement and noise of MakeLimitTable. Where the table sees the width and the
+// background only through their product (w·(b − 1)·0.02·D), every width from 1 to 5 px fits as
+// well as the injected 2 px with its own background (1 px: b = 3.4, 5 px: b = 1.48): the interval
+// is [1, 5] whatever width the fit stopped at, and 0 (no effect) stays out. Where the width acts
+// as D² and the background as D, no other width is within the profile's 3.84: [2, 2]. The
+// interval the fit's curvature gives a discrete axis is its value alone, which fails the first;
+// taking every node fails the second.
+TEST(Profile, ADiscreteWidthsIntervalHoldsTheWidthsTheTableCannotTellApart) {
+  for (int separable = 0; separable < 2; ++separable) {
+    SCOPED_TRACE(separable ? "width ∝ D², background ∝ D" : "width × background");
+    auto law = [&](double w, double b, double dist) {
+      return separable ? 0.01 * w * dist * dist + 0.04 * (b - 1) * dist
+                       : 0.02 * w * (b - 1) * dist;
+    };
+    std::vector<records::PanelMetrics> rows = ArticleGrid();
+    std::mt19937 rng(17);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    std::map<std::string, double> shift;
+    for (auto& r : rows) {
+      const std::string key = r.light + std::to_string(r.distance_m) + std::to_string(r.angle_deg);
+      if (!shift.count(key)) shift[key] = (0.05 + 0.02 * r.distance_m) * unit(rng);
+      r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng) + law(2, 2.2, r.distance_m);
+    }
+    LimitTable t;
+    std::string why;
+    ASSERT_TRUE(BuildDesign(rows, &t.d, &why)) << why;
+    t.s = MedianBiasOnly(t.d);
+    const int kk = t.d.num_metrics();
+    t.s.jac_log_sigma.assign(t.s.base.size(), 0.0);
+    t.s.jac_logit_p.assign(t.s.base.size(), 0.0);
+    Surface surf;
+    for (const Candidate& c : DefaultCandidates())
+      if (c.effect == "region_spill") surf.candidate = c;
+    ASSERT_EQ(surf.candidate.effect, "region_spill");
+    ASSERT_TRUE(surf.candidate.axes[0].discrete);
+    const std::vector<double>& widths = surf.candidate.axes[0].nodes;
+    const std::vector<double>& backgrounds = surf.candidate.axes[1].nodes;
+    ASSERT_EQ(widths.front(), 0.0);
+    ASSERT_EQ(widths.back(), 5.0);
+    surf.num_nodes = static_cast<int>(widths.size() * backgrounds.size());
+    for (int c = 0; c < t.d.num_cells(); ++c)
+      for (int k = 0; k < kk; ++k) {
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        const double dist = t.d.cells[c].distance_m;
+        if (k == 0) t.s.jac_log_sigma[o] = 0.02 * dist;
+        for (double w : widths)
+          for (double b : backgrounds)
+            surf.table.push_back(t.s.base[o] + (k == 0 ? law(w, b, dist) : 0));
+      }
+    t.s.surfaces.push_back(surf);
+    t.n = EstimateNoise(t.d, t.s);
+    t.pe = EstimatePlacement(t.d, t.s, t.n, std::vector<char>(t.d.num_cells(), 1), 0.05);
+    FitSettings fs;
+    fs.huber_k = 0;
+    const std::vector<char> all(t.d.num_cells(), 1);
+    const GapModel model(t.d, t.s, t.n, fs, &t.pe);
+    ModelFit fit = FitCandidate(model, 0, Scope::kShared, all);
+    ASSERT_TRUE(fit.success) << fit.message;
+    ASSERT_EQ(fit.terms.size(), 1u);
+    EXPECT_FALSE(fit.terms[0].profiled);
+    const double fitted = fit.terms[0].values[0][0];
+    EXPECT_EQ(fit.terms[0].ci_lo[0][0], fitted);  // the curvature's: the value alone
+    EXPECT_EQ(fit.terms[0].ci_hi[0][0], fitted);
+    ProfileDiscreteAxes(model, all, &fit);
+    const TermFit& tf = fit.terms[0];
+    EXPECT_TRUE(tf.profiled);
+    EXPECT_EQ(tf.values[0][0], fitted);  // the value stays
+    std::printf("%s: width %g [%g, %g], background %.3f [%.3f, %.3f]\n",
+                separable ? "separable" : "product", fitted, tf.ci_lo[0][0], tf.ci_hi[0][0],
+                tf.values[0][1], tf.ci_lo[0][1], tf.ci_hi[0][1]);
+    if (separable) {
+      EXPECT_EQ(fitted, 2.0);
+      EXPECT_EQ(tf.ci_lo[0][0], 2.0);
+      EXPECT_EQ(tf.ci_hi[0][0], 2.0);
+    } else {
+      EXPECT_EQ(tf.ci_lo[0][0], 1.0);
+      EXPECT_EQ(tf.ci_hi[0][0], 5.0);
+    }
+  }
+}
+
 // The keep rule's share (MovedShare): two metrics, three observations each (observation o is
 // metric o % 2). The change moves metric 0 only: its share is that metric's, whatever gap
 // metric 1 holds (read as a share of the whole, a gap of 100 there would take it from 0.75 to
@@ -1401,13 +1493,7 @@ sim::SimParams WithEffect(const sim::SimParams& p, const sim::EffectSpec& effect
   return q;
 }
 
-// The signature tests' sensor (σ_d 0.08 px, hole probability p) and seed, and their cell.
-sim::SimParams SignatureSensor(double invalid_prob, std::uint64_t seed) {
-  sim::SimParams p;
-  p.sensor.fallback = {"", "", 0.08, invalid_prob};
-  p.seed = seed;
-  return p;
-}
+// The signature tests' cell.
 sim::Cell SignatureCell(double distance_m, double angle_deg, const std::string& preset,
                         bool emitter_on) {
   sim::Cell c;
@@ -1423,7 +1509,7 @@ sim::Cell SignatureCell(double distance_m, double angle_deg, const std::string& 
 // r times the panel's depth. Its signature: more pixels, a far tail (mean − median), a wider
 // panel; none at w = 0; and the whole spill inside the rendered window up to its 5 px bound.
 TEST(RegionSpill, SignatureInTheMetrics) {
-  const sim::SimParams p = SignatureSensor(0.2, 5);
+  const sim::SimParams p = FallbackSensor(5, 0.2);
   const sim::Cell c = SignatureCell(12, 20, "HD", false);
   sim::MetricsParams mp;
   mp.frames = 5;
@@ -1457,7 +1543,7 @@ TEST(RegionSpill, SignatureInTheMetrics) {
 // same to the bit whatever the gain; with it on at 4 m (within its reach) a gain of 0 gives the
 // emitter-off valid share, and a larger gain more valid pixels; the depths do not move.
 TEST(EmitterGain, SignatureInTheMetrics) {
-  const sim::SimParams p = SignatureSensor(0.6, 9);
+  const sim::SimParams p = FallbackSensor(9, 0.6);
   sim::MetricsParams mp;
   mp.frames = 5;
   auto at = [&](double gain, bool on) {
