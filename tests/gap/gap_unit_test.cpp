@@ -848,10 +848,9 @@ double OffsetLaw(double delta, double distance_m) {
 }
 
 // The article's grid, every test point placed by τ(D) = 0.05 m + 2 % of D, over 5 mm of replicate
-// noise; with `delta_px`, each row's median also departs by a disparity offset of that size.
-LimitTable MakeLimitTable(
-    std::uint32_t seed,
-    const std::function<double(const records::PanelMetrics&)>& delta_px = nullptr) {
+// noise (draws of `seed`); each row's median moved by `extra` too, when given.
+std::vector<records::PanelMetrics> PlacedGrid(
+    std::uint32_t seed, const std::function<double(const records::PanelMetrics&)>& extra) {
   std::vector<records::PanelMetrics> rows = ArticleGrid();
   std::mt19937 rng(seed);
   std::normal_distribution<double> unit(0.0, 1.0);
@@ -860,8 +859,16 @@ LimitTable MakeLimitTable(
     const std::string key = r.light + std::to_string(r.distance_m) + std::to_string(r.angle_deg);
     if (!shift.count(key)) shift[key] = (0.05 + 0.02 * r.distance_m) * unit(rng);
     r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng);
-    if (delta_px) r.median_m += OffsetLaw(delta_px(r), r.distance_m);
+    if (extra) r.median_m += extra(r);
   }
+  return rows;
+}
+
+// The rows against a simulation of the median bias alone (MedianBiasOnly; the calibration's σ_d
+// moving the median by 0.02·D), with one candidate whose surface adds law(its node's values, D)
+// to the median; their noise and placement estimated.
+LimitTable MedianTable(const std::vector<records::PanelMetrics>& rows, const Candidate& candidate,
+                       const std::function<double(const std::vector<double>&, double)>& law) {
   LimitTable t;
   std::string why;
   if (!BuildDesign(rows, &t.d, &why)) throw std::runtime_error(why);
@@ -870,22 +877,43 @@ LimitTable MakeLimitTable(
   t.s.jac_log_sigma.assign(t.s.base.size(), 0.0);
   t.s.jac_logit_p.assign(t.s.base.size(), 0.0);
   Surface surf;
-  surf.candidate = DefaultCandidates()[0];
-  surf.candidate.range_law = false;  // the law as given, not averaged over placement
-  EXPECT_EQ(surf.candidate.effect, "disparity_offset");
-  const std::vector<double>& nodes = surf.candidate.axes[0].nodes;
-  surf.num_nodes = static_cast<int>(nodes.size());
+  surf.candidate = candidate;
+  const std::vector<Axis>& axes = candidate.axes;
+  const int last = static_cast<int>(axes.back().nodes.size());
+  surf.num_nodes = static_cast<int>(axes[0].nodes.size()) * (axes.size() == 2 ? last : 1);
   for (int c = 0; c < t.d.num_cells(); ++c)
     for (int k = 0; k < kk; ++k) {
       const size_t o = static_cast<size_t>(c) * kk + k;
       const double dist = t.d.cells[c].distance_m;
       if (k == 0) t.s.jac_log_sigma[o] = 0.02 * dist;
-      for (double v : nodes) surf.table.push_back(t.s.base[o] + (k == 0 ? OffsetLaw(v, dist) : 0));
+      for (int node = 0; node < surf.num_nodes; ++node) {
+        std::vector<double> values{axes[0].nodes[axes.size() == 1 ? node : node / last]};
+        if (axes.size() == 2) values.push_back(axes[1].nodes[node % last]);
+        surf.table.push_back(t.s.base[o] + (k == 0 ? law(values, dist) : 0));
+      }
     }
   t.s.surfaces.push_back(surf);
   t.n = EstimateNoise(t.d, t.s);
   t.pe = EstimatePlacement(t.d, t.s, t.n, std::vector<char>(t.d.num_cells(), 1), 0.05);
   return t;
+}
+
+// PlacedGrid's rows against a disparity offset's surface; with `delta_px`, each row's median
+// also departs by an offset of that size.
+LimitTable MakeLimitTable(
+    std::uint32_t seed,
+    const std::function<double(const records::PanelMetrics&)>& delta_px = nullptr) {
+  Candidate offset = DefaultCandidates()[0];
+  offset.range_law = false;  // the law as given, not averaged over placement
+  EXPECT_EQ(offset.effect, "disparity_offset");
+  return MedianTable(
+      PlacedGrid(seed,
+                 delta_px ? std::function<double(const records::PanelMetrics&)>(
+                                [&](const records::PanelMetrics& r) {
+                                  return OffsetLaw(delta_px(r), r.distance_m);
+                                })
+                          : nullptr),
+      offset, [](const std::vector<double>& v, double dist) { return OffsetLaw(v[0], dist); });
 }
 
 // Scopes (fit.h). An offset of 0.3 px in the sunset rows alone, both presets alike: fitted per
@@ -1028,44 +1056,16 @@ TEST(Profile, ADiscreteWidthsIntervalHoldsTheWidthsTheTableCannotTellApart) {
       return separable ? 0.01 * w * dist * dist + 0.04 * (b - 1) * dist
                        : 0.02 * w * (b - 1) * dist;
     };
-    std::vector<records::PanelMetrics> rows = ArticleGrid();
-    std::mt19937 rng(17);
-    std::normal_distribution<double> unit(0.0, 1.0);
-    std::map<std::string, double> shift;
-    for (auto& r : rows) {
-      const std::string key = r.light + std::to_string(r.distance_m) + std::to_string(r.angle_deg);
-      if (!shift.count(key)) shift[key] = (0.05 + 0.02 * r.distance_m) * unit(rng);
-      r.median_m = r.distance_m + shift[key] + 0.005 * unit(rng) + law(2, 2.2, r.distance_m);
-    }
-    LimitTable t;
-    std::string why;
-    ASSERT_TRUE(BuildDesign(rows, &t.d, &why)) << why;
-    t.s = MedianBiasOnly(t.d);
-    const int kk = t.d.num_metrics();
-    t.s.jac_log_sigma.assign(t.s.base.size(), 0.0);
-    t.s.jac_logit_p.assign(t.s.base.size(), 0.0);
-    Surface surf;
+    Candidate spill;
     for (const Candidate& c : DefaultCandidates())
-      if (c.effect == "region_spill") surf.candidate = c;
-    ASSERT_EQ(surf.candidate.effect, "region_spill");
-    ASSERT_TRUE(surf.candidate.axes[0].discrete);
-    const std::vector<double>& widths = surf.candidate.axes[0].nodes;
-    const std::vector<double>& backgrounds = surf.candidate.axes[1].nodes;
-    ASSERT_EQ(widths.front(), 0.0);
-    ASSERT_EQ(widths.back(), 5.0);
-    surf.num_nodes = static_cast<int>(widths.size() * backgrounds.size());
-    for (int c = 0; c < t.d.num_cells(); ++c)
-      for (int k = 0; k < kk; ++k) {
-        const size_t o = static_cast<size_t>(c) * kk + k;
-        const double dist = t.d.cells[c].distance_m;
-        if (k == 0) t.s.jac_log_sigma[o] = 0.02 * dist;
-        for (double w : widths)
-          for (double b : backgrounds)
-            surf.table.push_back(t.s.base[o] + (k == 0 ? law(w, b, dist) : 0));
-      }
-    t.s.surfaces.push_back(surf);
-    t.n = EstimateNoise(t.d, t.s);
-    t.pe = EstimatePlacement(t.d, t.s, t.n, std::vector<char>(t.d.num_cells(), 1), 0.05);
+      if (c.effect == "region_spill") spill = c;
+    ASSERT_EQ(spill.effect, "region_spill");
+    ASSERT_TRUE(spill.axes[0].discrete);
+    ASSERT_EQ(spill.axes[0].nodes.front(), 0.0);
+    ASSERT_EQ(spill.axes[0].nodes.back(), 5.0);
+    const LimitTable t = MedianTable(
+        PlacedGrid(17, [&](const records::PanelMetrics& r) { return law(2, 2.2, r.distance_m); }),
+        spill, [&](const std::vector<double>& v, double dist) { return law(v[0], v[1], dist); });
     FitSettings fs;
     fs.huber_k = 0;
     const std::vector<char> all(t.d.num_cells(), 1);
