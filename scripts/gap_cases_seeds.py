@@ -8,7 +8,9 @@ case, the seeds it passes at and what was selected at each, as a Markdown table;
 often the 95 % interval of a selected effect that was injected (one parameter, in every cell)
 holds the injected size, read from each case's gap.json (DIR/seed-S/cases/): the interval
 gap.json gives, and the fit's own (`over_folds.ci95_fit`, where the refits widened it); an
-effect fitted per scenario counts once per scenario. Last, for each case of one effect of one
+effect fitted per scenario counts once per scenario; and how often the interval of a selected,
+injected effect's discrete width (width_px: the profile over the widths) holds the injected
+width. Last, for each case of one effect of one
 parameter injected in every cell, its size against the detection limit on that side that each
 seed's table gives (gap.json `detection_limits`: the higher of the fit's own test, 80 % power,
 and the share of the gap the keep rule asks, read in the whole gap or in the metrics the effect
@@ -98,6 +100,37 @@ def coverage(path, case, injected):
                 continue
             fit = spread.get("ci95_fit") or ci
             out.append((ci[0] <= truth <= ci[1], fit[0] <= truth <= fit[1]))
+    return out
+
+
+def injected_widths(text):
+    """{effect: width} of the effects injected in every cell with a discrete width (width_px)."""
+    out = {}
+    for name, params in re.findall(r"(\w+) \(([^)]*)\)", text):
+        for part in params.split(","):
+            kv = part.split()
+            if len(kv) == 2 and kv[0] == "width_px":
+                try:
+                    out[name] = float(kv[1])
+                except ValueError:
+                    pass
+    return out
+
+
+def width_coverage(path, case, injected):
+    """[holds] for the widths of the case's selected effects that were injected: each group's
+    interval (gap.json ci95, the profile over the widths) against the injected width."""
+    gap = load_gap(path, case)
+    out = []
+    for sel in (gap or {}).get("selected") or []:
+        if sel.get("name") not in injected:
+            continue
+        ci = sel.get("ci95") or {}
+        groups = [ci] if sel.get("scope") == "shared" else [g or {} for g in ci.values()]
+        for group in groups:
+            lo_hi = group.get("width_px")
+            if lo_hi and None not in lo_hi:
+                out.append(lo_hi[0] <= injected[sel["name"]] <= lo_hi[1])
     return out
 
 
@@ -263,6 +296,14 @@ def main(argv):
               "(simulated cases): "
               "%d of %d (the fit's own: %d of %d)."
               % (sum(h for h, _ in held), len(held), sum(f for _, f in held), len(held)))
+    widths = []
+    for (seed, table), path in zip(runs, argv[1:]):
+        for case, (_, _, injected) in table.items():
+            if not is_real(case):
+                widths += width_coverage(path, case, injected_widths(injected))
+    if widths:
+        print("Widths of selected, injected effects whose 95 %% interval (the profile over the "
+              "widths) holds the injected width: %d of %d." % (sum(widths), len(widths)))
     limits_table(runs, argv[1:])
     return 0
 
