@@ -29,6 +29,21 @@ class TemporalNoise {
     ++bins_[static_cast<std::size_t>(bin)];
     ++pairs_;
   }
+  // Add(delta(j)) for j in [0, n), the count kept in a register (a frame's pixels in one call:
+  // Add alone stores the count at every pixel, as the bins could alias it).
+  template <typename F>
+  void AddEach(std::size_t n, F delta) {
+    long long* const bins = bins_.data();
+    long long added = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      const double v = delta(j);
+      if (std::isnan(v)) continue;
+      const double a = std::fabs(v) / kBinPx;
+      ++bins[a >= kBins - 1 ? kBins - 1 : static_cast<int>(a)];
+      ++added;
+    }
+    pairs_ += added;
+  }
   long long pairs() const { return pairs_; }
   // σ_d = RMS(Δd within 5·1.4826·median|Δd|)/√2 [px]; NaN without pairs.
   double SigmaPx() const;

@@ -101,7 +101,6 @@ RegionMetrics::RegionMetrics(const camera::Intrinsics& intrinsics, const PanelRe
     max_range_per_count_ = *hi;
   }
   sums_.resize(pixels_.size());
-  gathered_.resize(pixels_.size());
   valid_.resize(pixels_.size());
   pairs_.resize(pixels_.size());
   previous_.resize(pixels_.size(), 0);
@@ -109,6 +108,7 @@ RegionMetrics::RegionMetrics(const camera::Intrinsics& intrinsics, const PanelRe
 
 void RegionMetrics::AddFrame(const records::DepthFrame& frame) {
   const std::uint16_t* counts = frame.counts.data();
+  gathered_.resize(pixels_.size());  // here, not made for callers that give counts themselves
   for (std::size_t k = 0; k < pixels_.size(); ++k) gathered_[k] = counts[pixels_[k]];
   AddRegionCounts(gathered_.data(), frame.depth_units_m);
 }
@@ -182,11 +182,11 @@ void RegionMetrics::AddRegionCounts(const std::uint16_t* counts, double units) {
     const double fb_units = intrinsics_.fx * params_.baseline_m / units;  // f·B/Z = fb_units/c
     const CountTerms* const terms = terms_.data();
     const std::size_t base = count_lo_ - 1;
-    for (std::size_t j = 0; j < n_pairs; ++j) {
+    const std::uint16_t* const previous = previous_.data();
+    temporal_noise_.AddEach(n_pairs, [&](std::size_t j) {
       const std::size_t k = pairs[j];
-      temporal_noise_.Add(fb_units * (terms[counts[k] - base].per_count -
-                                      terms[previous_[k] - base].per_count));
-    }
+      return fb_units * (terms[counts[k] - base].per_count - terms[previous[k] - base].per_count);
+    });
   }
   std::copy(counts, counts + n, previous_.begin());
   ++frames_;

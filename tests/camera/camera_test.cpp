@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
+#include "camera/disparity_noise.h"
 #include "camera/intrinsics.h"
 
 namespace depthbias::camera {
@@ -36,6 +40,27 @@ TEST(Camera, ParsesDistortionNames) {
   ASSERT_TRUE(ParseDistortion("Inverse Brown Conrady", &m));
   EXPECT_EQ(m, Distortion::kInverseBrownConrady);
   EXPECT_FALSE(ParseDistortion("fisheye-ish", &m));
+}
+
+// A frame's pixels added in one call (AddEach) count what adding them one by one counts: the
+// number of pairs and σ_d (read from the bins), before and after further samples; NaN left
+// out, beyond 4 px in the top bin, either sign.
+TEST(TemporalNoise, AddEachIsAddOneByOne) {
+  std::vector<double> deltas;
+  for (int i = 0; i < 5000; ++i) deltas.push_back(0.0137 * ((i * 7919) % 601 - 300));
+  deltas.insert(deltas.end(), {NAN, 4.5, -9.0, 0.0, -0.0, 3.9995, 0.001, -0.001, INFINITY});
+  TemporalNoise one, each;
+  for (double d : deltas) one.Add(d);
+  each.AddEach(deltas.size(), [&](std::size_t j) { return deltas[j]; });
+  EXPECT_EQ(each.pairs(), one.pairs());
+  EXPECT_EQ(each.pairs(), static_cast<long long>(deltas.size()) - 1);  // the NaN
+  EXPECT_EQ(each.SigmaPx(), one.SigmaPx());
+  // The bins themselves, through what each further sample does to σ_d.
+  for (double extra : {0.0, 0.02, 0.5, 3.0}) {
+    one.Add(extra);
+    each.AddEach(1, [&](std::size_t) { return extra; });
+    EXPECT_EQ(each.SigmaPx(), one.SigmaPx()) << extra;
+  }
 }
 
 }  // namespace
