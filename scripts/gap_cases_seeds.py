@@ -107,13 +107,15 @@ def injected_widths(text):
     """{effect: width} of the effects injected in every cell with a discrete width (width_px)."""
     out = {}
     for name, params in re.findall(r"(\w+) \(([^)]*)\)", text):
+        values = {}
         for part in params.split(","):
             kv = part.split()
-            if len(kv) == 2 and kv[0] == "width_px":
-                try:
-                    out[name] = float(kv[1])
-                except ValueError:
-                    pass
+            try:
+                values[kv[0]] = float(kv[1]) if len(kv) == 2 else None
+            except (ValueError, IndexError):
+                values[part] = None  # "sunset only": not in every cell
+        if None not in values.values() and "width_px" in values:
+            out[name] = values["width_px"]
     return out
 
 

@@ -190,11 +190,13 @@ ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
                       const std::vector<char>& train, const ModelFit* shared = nullptr);
 
 // The 95 % interval of each discrete axis of the fitted terms (a width, fitted at one node): the
-// hull of the nodes whose refit, every other parameter and the calibration free, raises the
-// deviance by at most χ²₁(0.95) = 3.84 over the refit at the node fitted (a profile likelihood
-// over the nodes; a continuous axis's interval comes from the fit's curvature). Each refit starts
-// from the fit's values and from the grid's reference values, and keeps the lower deviance.
-// Marks the terms `profiled`; a group without cells keeps its value.
+// hull of the nodes whose refit raises the deviance by at most χ²₁(0.95) = 3.84 over the lowest
+// refit of all the nodes (a profile likelihood over the nodes, conditional on the other widths;
+// a continuous axis's interval comes from the fit's curvature). At each node the continuous
+// parameters and the calibration are refitted, started from the fit's values and from the axes'
+// neutral values (their reference where they have none), the lower deviance kept; the other
+// terms' and groups' widths stay. The fitted node is always inside. Marks the terms `profiled`;
+// a group without cells gets no interval (NaN). Nothing is refitted without a discrete axis.
 void ProfileDiscreteAxes(const GapModel& model, const std::vector<char>& cells, ModelFit* fit);
 
 // Held-out predictions: each fold's cells predicted by the terms refitted on the other cells

@@ -164,7 +164,12 @@ void ProfileDiscreteAxes(const GapModel& model, const std::vector<char>& cells,
                          ModelFit* fit) {  // fit.h
   constexpr double kChi2_95 = 3.841459;
   std::vector<Term> terms;
-  for (const TermFit& t : fit->terms) terms.push_back(t.term);
+  bool any = false;
+  for (const TermFit& t : fit->terms) {
+    terms.push_back(t.term);
+    for (const Axis& a : model.surface(t.term.candidate).candidate.axes) any = any || a.discrete;
+  }
+  if (!any) return;
   auto refit = [&](const std::vector<Term>& with) {
     double best = INFINITY;
     for (const ModelFit* start : {static_cast<const ModelFit*>(fit),
@@ -174,8 +179,8 @@ void ProfileDiscreteAxes(const GapModel& model, const std::vector<char>& cells,
     }
     return best;
   };
-  const double at_node = refit(terms);
-  if (!std::isfinite(at_node)) return;
+  const double at_fitted = refit(terms);
+  if (!std::isfinite(at_fitted)) return;
   for (size_t i = 0; i < terms.size(); ++i) {
     TermFit& tf = fit->terms[i];
     const Candidate& cand = model.surface(tf.term.candidate).candidate;
@@ -183,20 +188,30 @@ void ProfileDiscreteAxes(const GapModel& model, const std::vector<char>& cells,
       if (!cand.axes[a].discrete) continue;
       const std::vector<double>& nodes = cand.axes[a].nodes;
       for (size_t g = 0; g < tf.values.size(); ++g) {
-        if (g < tf.group_used.size() && !tf.group_used[g]) continue;
         const int fitted = tf.term.Discrete(static_cast<int>(g), static_cast<int>(a));
         if (fitted < 0) continue;
-        double lo = nodes[fitted], hi = nodes[fitted];
+        if (g < tf.group_used.size() && !tf.group_used[g]) {  // no cells: no interval
+          tf.ci_lo[g][a] = tf.ci_hi[g][a] = NAN;
+          continue;
+        }
+        // Every width's deviance; the interval is read from the lowest (the width fitted
+        // alone, beside the others' widths, need not be the lowest here).
+        std::vector<double> deviance(nodes.size(), INFINITY);
+        deviance[fitted] = at_fitted;
         for (int j = 0; j < static_cast<int>(nodes.size()); ++j) {
-          if (nodes[j] >= lo && nodes[j] <= hi) continue;
+          if (j == fitted) continue;
           std::vector<Term> moved = terms;
           Term& m = moved[i];
           if (m.discrete_node.size() == 1 && tf.values.size() > 1)
             m.discrete_node.assign(tf.values.size(), m.discrete_node[0]);
           m.discrete_node[m.discrete_node.size() == 1 ? 0 : g][a] = j;
-          if (refit(moved) - at_node <= kChi2_95)
-            lo = std::min(lo, nodes[j]), hi = std::max(hi, nodes[j]);
+          deviance[j] = refit(moved);
         }
+        const double lowest = *std::min_element(deviance.begin(), deviance.end());
+        double lo = nodes[fitted], hi = nodes[fitted];
+        for (size_t j = 0; j < nodes.size(); ++j)
+          if (deviance[j] - lowest <= kChi2_95)
+            lo = std::min(lo, nodes[j]), hi = std::max(hi, nodes[j]);
         tf.ci_lo[g][a] = lo;
         tf.ci_hi[g][a] = hi;
         tf.profiled = true;

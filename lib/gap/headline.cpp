@@ -159,6 +159,13 @@ std::string LimitsMarkdown(const DiagnoseResult& r) {
 
 }  // namespace
 
+std::string WidthIntervalNote(const DiagnoseResult& r) {
+  for (const TermFit& t : r.selected.terms)
+    if (t.profiled)
+      return " (a width's interval: the widths whose refit lies within 3.84 of the lowest)";
+  return "";
+}
+
 std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
                        bool hide_edges) {
   const Candidate& c = r.candidates[t.term.candidate];

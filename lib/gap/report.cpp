@@ -534,8 +534,8 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
       << ScopeText(r.steps[i].scope) << "): ΔBIC "
       << Num(r.steps[i].delta_bic) << ", held-out gain " << Num(r.steps[i].heldout_gain) << "\n";
   if (!r.selected.terms.empty()) {
-    o << "\nSelected, fitted together (a width's interval: the widths whose refit raises the "
-      << "deviance by at most 3.84):\n\n| effect | parameters [95 % interval] |\n|---|---|\n";
+    o << "\nSelected, fitted together" << text::WidthIntervalNote(r)
+      << ":\n\n| effect | parameters [95 % interval] |\n|---|---|\n";
     for (const TermFit& t : r.selected.terms)
       o << "| " << CandidateOf(r, t).effect << " | " << ParamsText(r, t, true) << " |\n";
   }

@@ -34,6 +34,9 @@ inline std::string Pct(double v) {
 std::string ParamsText(const DiagnoseResult& r, const TermFit& t, bool with_ci,
                        bool hide_edges = false);
 
+// " (a width's interval: …)" where a selected term's width was profiled, else empty.
+std::string WidthIntervalNote(const DiagnoseResult& r);
+
 // The headline for a safety engineer: range error in metres and its direction, placement,
 // emitter, what is selected or unexplained, the nested simulated shrink.
 std::string Headline(const DiagnoseResult& r);

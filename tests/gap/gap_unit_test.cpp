@@ -1048,7 +1048,8 @@ TEST(Scope, AWiderFitMustBeatTheSimplerByOneStandardError) {
 // is [1, 5] whatever width the fit stopped at, and 0 (no effect) stays out. Where the width acts
 // as D² and the background as D, no other width is within the profile's 3.84: [2, 2]. The
 // interval the fit's curvature gives a discrete axis is its value alone, which fails the first;
-// taking every node fails the second.
+// taking every node fails the second; reading the deviances from the width given rather than
+// the lowest fails the fit held at 3 px.
 TEST(Profile, ADiscreteWidthsIntervalHoldsTheWidthsTheTableCannotTellApart) {
   for (int separable = 0; separable < 2; ++separable) {
     SCOPED_TRACE(separable ? "width ∝ D², background ∝ D" : "width × background");
@@ -1088,6 +1089,18 @@ TEST(Profile, ADiscreteWidthsIntervalHoldsTheWidthsTheTableCannotTellApart) {
       EXPECT_EQ(fitted, 2.0);
       EXPECT_EQ(tf.ci_lo[0][0], 2.0);
       EXPECT_EQ(tf.ci_hi[0][0], 2.0);
+      // A fit held at 3 px (as the selection may hold a width chosen beside other terms): the
+      // interval is read from the lowest width's refit, so it runs from 2 px (the lowest) to
+      // 3 px (the width given, always inside), and 1 px, far above 2 px's deviance though
+      // nearer 3 px's, stays out.
+      Term at3 = tf.term;
+      at3.discrete_node = {{3, -1}};
+      ModelFit held = FitTerms(model, {at3}, all);
+      ASSERT_TRUE(held.success) << held.message;
+      ProfileDiscreteAxes(model, all, &held);
+      EXPECT_EQ(held.terms[0].values[0][0], 3.0);
+      EXPECT_EQ(held.terms[0].ci_lo[0][0], 2.0);
+      EXPECT_EQ(held.terms[0].ci_hi[0][0], 3.0);
     } else {
       EXPECT_EQ(tf.ci_lo[0][0], 1.0);
       EXPECT_EQ(tf.ci_hi[0][0], 5.0);
