@@ -37,7 +37,7 @@ timed() {  # prints "wall_s cpu_s"
 machine=$(bench_machine)
 echo "machine: $machine"
 runs=() sims=()
-for _ in $(seq "$REPEAT"); do
+for ((i = 0; i < REPEAT; i++)); do
   runs+=("$(timed "$APP" --real "$REAL" --out "$OUT_DIR/out")")
   sims+=("$(timed "$SIM" --protocol config/protocol_paper.yaml --metrics-only --frames 10 \
               --out "$OUT_DIR/m.csv")")

@@ -73,7 +73,7 @@ timed() {
   cat "$OUT/time.txt"
 }
 # Best of REPEAT; the first failed run fails it (the loop's last status alone would hide it).
-run() { { for _ in $(seq "$REPEAT"); do timed "$@" || exit 1; done; } | best; }
+run() { { for ((i = 0; i < REPEAT; i++)); do timed "$@" || exit 1; done; } | best; }
 
 det_s=$(run "$BIN/obstacle_detector" --weights "$OUT/w.yaml" \
           --config config/obstacle_detector.yaml --out "$OUT/d.jsonl" "$BAG")

@@ -41,7 +41,7 @@ machine=$(bench_machine)
 echo "machine: $machine"
 
 runs=()
-for _ in $(seq "$REPEAT"); do
+for ((i = 0; i < REPEAT; i++)); do
   rm -rf "$OUT_DIR/bags"
   runs+=("$(timed "$SIM" --protocol "$OUT_DIR/protocol.yaml" \
             --sensor config/sensor_calibrated.yaml --out-dir "$OUT_DIR/bags")")
@@ -66,7 +66,7 @@ for threads in default 1; do
   args=()
   [ "$threads" = default ] || args=(--threads "$threads")
   runs=()
-  for _ in $(seq "$REPEAT"); do
+  for ((i = 0; i < REPEAT; i++)); do
     runs+=("$(timed "$SIM" --protocol config/protocol_paper.yaml --metrics-only --frames 30 \
               --out "$OUT_DIR/metrics.csv" "${args[@]}")")
   done
