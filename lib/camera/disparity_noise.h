@@ -23,14 +23,10 @@ class TemporalNoise {
   // Δd = f·B·(1/Z − 1/Z_prev) of one pixel valid in two consecutive frames [px]; NaN ignored.
   // Inline: the metrics kernel calls it for every pixel of every frame.
   void Add(double delta_disparity_px) {
-    if (std::isnan(delta_disparity_px)) return;
-    const double a = std::fabs(delta_disparity_px) / kBinPx;
-    const int bin = a >= kBins - 1 ? kBins - 1 : static_cast<int>(a);
-    ++bins_[static_cast<std::size_t>(bin)];
-    ++pairs_;
+    AddEach(1, [delta_disparity_px](std::size_t) { return delta_disparity_px; });
   }
   // Add(delta(j)) for j in [0, n), the count kept in a register (a frame's pixels in one call:
-  // Add alone stores the count at every pixel, as the bins could alias it).
+  // one Add a pixel stores the count at every pixel, as the bins could alias it).
   template <typename F>
   void AddEach(std::size_t n, F delta) {
     long long* const bins = bins_.data();

@@ -44,7 +44,7 @@ TEST(Camera, ParsesDistortionNames) {
 
 // A frame's pixels added in one call (AddEach) count what adding them one by one counts: the
 // number of pairs and σ_d (read from the bins), before and after further samples; NaN left
-// out, beyond 4 px in the top bin, either sign.
+// out, beyond 4 px in the top bin, either sign. σ_d checked against values worked out here.
 TEST(TemporalNoise, AddEachIsAddOneByOne) {
   std::vector<double> deltas;
   for (int i = 0; i < 5000; ++i) deltas.push_back(0.0137 * ((i * 7919) % 601 - 300));
@@ -61,6 +61,14 @@ TEST(TemporalNoise, AddEachIsAddOneByOne) {
     each.AddEach(1, [&](std::size_t) { return extra; });
     EXPECT_EQ(each.SigmaPx(), one.SigmaPx()) << extra;
   }
+  // Worked out: 100 samples of ±0.0105 px (the bin [0.010, 0.011), centre 0.0105) and one of
+  // 3 px beyond five robust scales: 101 pairs, σ_d = 0.0105/√2; a NaN adds nothing.
+  TemporalNoise known;
+  known.AddEach(102, [](std::size_t j) {
+    return j == 100 ? 3.0 : j == 101 ? NAN : j % 2 ? 0.0105 : -0.0105;
+  });
+  EXPECT_EQ(known.pairs(), 101);
+  EXPECT_NEAR(known.SigmaPx(), 0.0105 / std::sqrt(2.0), 1e-12);
 }
 
 }  // namespace
