@@ -8,8 +8,10 @@
 #include <cctype>
 #include <initializer_list>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <thread>
 #include <vector>
 
@@ -63,6 +65,9 @@ constexpr char kUsage[] =
     "                       real table, at 1.5 and 0.5 times its own limits (repeatable;\n"
     "                       cases named after the file: \"STEM + disparity_offset (1.5 × its\n"
     "                       limit)\")\n"
+    "  --inject-times LIST  --inject-into: the multiples of a limit injected, separated by\n"
+    "                       commas, each in (0, 10] (1.5,0.5); below 1 an effect may go\n"
+    "                       unseen, from 1 on it must be selected as itself\n"
     "A table of more than 1024 rows is refused (each distinct cell is about a hundred\n"
     "simulations). Rows the sensor cannot stand for are left out and listed in gap.json's\n"
     "rows_skipped (exit 1): a preset that is not a D455 preset, a light and preset the sensor\n"
@@ -91,6 +96,8 @@ int main(int argc, char** argv) {
   io::InstallSignalCleanup();
   std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;
   std::vector<std::string> inject_csvs;  // --inject-into
+  std::vector<double> inject_times{1.5, 0.5};  // --inject-times
+  bool times_given = false;
   bool cases = false;
   std::vector<std::string> only_cases;  // --case
   double frames = 10, threads = std::max(1u, std::thread::hardware_concurrency());
@@ -114,6 +121,22 @@ int main(int argc, char** argv) {
       else if (a == "--cases") cases = true;
       else if (a == "--field") real_csv = args.Value();
       else if (a == "--inject-into") inject_csvs.push_back(args.Value());
+      else if (a == "--inject-times") {
+        // Multiples of a limit, separated by commas: each a number in (0, 10].
+        const std::string list = args.Value();
+        times_given = true;
+        inject_times.clear();
+        std::stringstream in(list);
+        for (std::string item; std::getline(in, item, ',');) {
+          char* end = nullptr;
+          const double v = std::strtod(item.c_str(), &end);
+          if (item.empty() || end != item.c_str() + item.size() || !(v > 0 && v <= 10))
+            throw BadInput("--inject-times: '" + item + "' is not a multiple in (0, 10]");
+          inject_times.push_back(v);
+        }
+        if (inject_times.empty() || list.back() == ',')
+          throw BadInput("--inject-times: '" + list + "' is not a list of multiples in (0, 10]");
+      }
       else if (a == "--case") only_cases.push_back(args.Value());
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
@@ -126,6 +149,8 @@ int main(int argc, char** argv) {
     params.simulate.threads = static_cast<int>(threads);
     if (!cases && !inject_csvs.empty())
       throw BadInput("--inject-into goes with --cases (see diagnose_gap --help)");
+    if (inject_csvs.empty() && times_given)
+      throw BadInput("--inject-times goes with --inject-into (see diagnose_gap --help)");
     if (!cases && (real_csv.empty() || out_dir.empty()))
       throw BadInput("--real REAL.csv and --out DIR are required (see diagnose_gap --help)");
     std::string why, named_sensor;
@@ -195,7 +220,8 @@ int main(int argc, char** argv) {
         gap::ScreenRows(gap::DesignRulesOf(base.sensor), &rows);
         std::string label = io::BaseName(csv);
         label = label.substr(0, label.rfind('.'));
-        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, label, params, only_real))
+        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, label, params, only_real,
+                                                                  inject_times))
           outcomes.push_back(std::move(o));
       }
       for (const std::string& name : only_real)

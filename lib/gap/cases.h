@@ -86,12 +86,14 @@ WithheldCase FieldCampaignCase();
 // Effects injected by their physics into a real table (the article's 128 rows, a user's
 // campaign): the table keeps the camera's own departures, placements, noise and outliers, which
 // no simulator of ours made. A disparity offset and a depth scale in the over-reading
-// (dangerous) direction, each at 1.5 and 0.5 times the limit the table's own diagnosis
-// publishes on that side (`limits`; 3 significant digits), named "LABEL + effect (1.5 × its
-// limit)"; an effect whose limit that way lies beyond its grid is left out.
+// (dangerous) direction, each at `times` the limit the table's own diagnosis publishes on that
+// side (`limits`; 3 significant digits), named "LABEL + effect (1.5 × its limit)" (the multiple
+// as %g); an effect whose limit that way lies beyond its grid is left out. Below 1 × its limit an
+// effect may go unseen (WithheldCase::may_go_unseen); from 1 × on it must be selected.
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
-                                            const std::string& label);
-// Whether a case name is one RealInjectionCases gives.
+                                            const std::string& label,
+                                            const std::vector<double>& times = {1.5, 0.5});
+// Whether a case name is one RealInjectionCases gives (any multiple).
 bool IsRealInjectionCase(const std::string& name);
 // The real rows with the case's effects applied by their physics, every row alike (or those of
 // one light): a disparity offset δ reads each depth as Z' = f·B / (f·B / Z + δ) (fb = f·B in
@@ -161,13 +163,15 @@ std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
                                           const std::vector<int>& only = {});
 
 // The real table diagnosed as it is (the reference, whose limits size the cases), then with
-// each of its RealInjectionCases injected (InjectIntoRealTable, f·B of base.sensor), one set
-// of simulations for all; `only`: the names of the cases to run (all when empty).
+// each of its RealInjectionCases injected at `times` its limits (InjectIntoRealTable, f·B of
+// base.sensor), one set of simulations for all; `only`: the names of the cases to run (all when
+// empty).
 std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
                                                const std::vector<records::PanelMetrics>& real,
                                                const std::string& label,
                                                const DiagnoseParams& params,
-                                               const std::vector<std::string>& only = {});
+                                               const std::vector<std::string>& only = {},
+                                               const std::vector<double>& times = {1.5, 0.5});
 
 // The cases as a Markdown table; the null suite summarized in one row when given.
 std::string FormatCases(const std::vector<CaseOutcome>& outcomes,

@@ -40,10 +40,13 @@ void MapRow(double length, double spread, double tilt, records::PanelMetrics* m)
     m->normal_tilt_deg = std::atan(std::tan(m->normal_tilt_deg * M_PI / 180) * tilt) * 180 / M_PI;
 }
 
+constexpr const char* kTimesLimit = " × its limit)";
+
 }  // namespace
 
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
-                                            const std::string& label) {
+                                            const std::string& label,
+                                            const std::vector<double>& times_list) {
   std::vector<WithheldCase> out;
   for (const char* effect : {"disparity_offset", "depth_scale"}) {
     const DetectionLimit* limit = nullptr;
@@ -55,9 +58,13 @@ std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
     for (int i = 0; i < 2; ++i)
       if (std::isfinite(limit->size[i]) && limit->far_m[i] > 0) side = i;
     if (side < 0) continue;  // no size inside the grid would be kept that way
-    for (const double times : {1.5, 0.5}) {
+    for (const double times : times_list) {
+      if (!(times > 0 && times <= 10))
+        throw std::invalid_argument("a multiple of a limit must be in (0, 10]");
+      char multiple[32];
+      std::snprintf(multiple, sizeof multiple, "%g", times);
       WithheldCase c;
-      c.name = label + " + " + effect + (times == 1.5 ? " (1.5 × its limit)" : " (0.5 × its limit)");
+      c.name = label + " + " + effect + " (" + multiple + kTimesLimit;
       c.family = "real";
       c.on_real = true;
       c.may_go_unseen = times < 1;
@@ -73,13 +80,16 @@ std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
 }
 
 bool IsRealInjectionCase(const std::string& name) {
-  for (const char* tail : {" (1.5 × its limit)", " (0.5 × its limit)"}) {
-    const std::string t(tail);
-    if (name.size() > t.size() && name.compare(name.size() - t.size(), t.size(), t) == 0 &&
-        name.find(" + ") != std::string::npos)
-      return true;
-  }
-  return false;
+  const std::string t(kTimesLimit);
+  if (name.size() <= t.size() || name.compare(name.size() - t.size(), t.size(), t) != 0 ||
+      name.find(" + ") == std::string::npos)
+    return false;
+  const size_t open = name.rfind(" (");
+  if (open == std::string::npos) return false;
+  const std::string multiple = name.substr(open + 2, name.size() - t.size() - open - 2);
+  char* end = nullptr;
+  const double v = std::strtod(multiple.c_str(), &end);
+  return !multiple.empty() && end == multiple.c_str() + multiple.size() && v > 0 && v <= 10;
 }
 
 std::vector<records::PanelMetrics> InjectIntoRealTable(
@@ -115,7 +125,8 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
                                                const std::vector<records::PanelMetrics>& real,
                                                const std::string& label,
                                                const DiagnoseParams& params,
-                                               const std::vector<std::string>& only) {
+                                               const std::vector<std::string>& only,
+                                               const std::vector<double>& times) {
   std::vector<Candidate> candidates;
   std::string why;
   if (!SelectCandidates(params.candidates, &candidates, &why)) throw std::invalid_argument(why);
@@ -140,7 +151,7 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
   const std::string reference_json = json(reference, label);
   const double fb = base.sensor.focal_px() * base.sensor.baseline_m;
   std::vector<CaseOutcome> out;
-  for (const WithheldCase& c : RealInjectionCases(reference.limits, label)) {
+  for (const WithheldCase& c : RealInjectionCases(reference.limits, label, times)) {
     if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end()) continue;
     const std::vector<records::PanelMetrics> rows = InjectIntoRealTable(real, c, fb);
     const std::string j = json(diagnose(rows, c.name), c.name);

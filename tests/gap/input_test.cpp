@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gap/cases.h"
@@ -147,6 +148,23 @@ TEST(DiagnoseGapInput, MessagesNameWhatIsWrong) {
   EXPECT_NE(r.err.find("nosuch"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("ok.csv"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(d / "out"));
+  // --inject-times: a list of multiples in (0, 10], with --inject-into; refused before any work.
+  const std::string inject = " --cases --inject-into " + ok.string() + " --out " +
+                             (d / "out").string() + " --inject-times ";
+  const std::vector<std::pair<std::string, std::string>> bad_times = {
+      {inject + "1,x", "--inject-times: 'x' is not a multiple in (0, 10]"},
+      {inject + "0", "--inject-times: '0' is not a multiple in (0, 10]"},
+      {inject + "11", "--inject-times: '11' is not a multiple in (0, 10]"},
+      {inject + "1,,2", "--inject-times: '' is not a multiple in (0, 10]"},
+      {inject + "1,", "--inject-times: '1,' is not a list of multiples in (0, 10]"},
+      {" --cases --inject-times 2", "--inject-times goes with --inject-into"}};
+  for (const auto& [args, message] : bad_times) {
+    r = Diagnose(args, d);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_EQ(Lines(r.err), 1) << args << ": " << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(d / "out")) << args;
+  }
 }
 
 // Any campaign: a user's unit, one light and one preset, 16 test points of its own (not the

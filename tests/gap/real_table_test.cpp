@@ -102,6 +102,21 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   EXPECT_TRUE(cases[1].may_go_unseen && cases[1].on_real);
   EXPECT_TRUE(IsRealInjectionCase(cases[1].name));
   EXPECT_FALSE(IsRealInjectionCase("disparity_offset large"));
+  // Other multiples (diagnose_gap --inject-times): named by the multiple, unseen only below 1.
+  const std::vector<WithheldCase> more = RealInjectionCases(limits, "t", {1, 2.25});
+  ASSERT_EQ(more.size(), 2u);
+  EXPECT_EQ(more[0].name, "t + disparity_offset (1 × its limit)");
+  EXPECT_NEAR(more[0].injected[0].params.at("delta_px"), -0.653, 1e-12);
+  EXPECT_FALSE(more[0].may_go_unseen);
+  EXPECT_EQ(more[1].name, "t + disparity_offset (2.25 × its limit)");
+  EXPECT_NEAR(more[1].injected[0].params.at("delta_px"), -1.47, 1e-12);
+  EXPECT_TRUE(IsRealInjectionCase(more[1].name));
+  for (const char* name : {"t + disparity_offset (0 × its limit)",
+                           "t + disparity_offset (x × its limit)",
+                           "t + disparity_offset ( × its limit)",
+                           "t + disparity_offset (11 × its limit)", "(2 × its limit)"})
+    EXPECT_FALSE(IsRealInjectionCase(name)) << name;
+  EXPECT_THROW(RealInjectionCases(limits, "t", {0}), std::invalid_argument);
 }
 
 // The article's 128 real rows with a disparity offset injected by its physics (lib/gap/cases.h,
