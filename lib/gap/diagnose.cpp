@@ -270,6 +270,36 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       // pooled one).
       std::vector<FoldVote> own(r.steps.size());
       std::vector<std::string> own_earners;
+      // A range law fitted at its grid's edge (not its parameter's own bound) has no size, and
+      // the table's law may lie beyond every grid, where the laws' forms are not compared: on
+      // the article's rows an offset injected at 2 and 3 times its limit (−1.31 and −1.96 px,
+      // beyond the offset's nodes at ±1 px) was kept as a depth scale at its edge of +20 % at
+      // 2 and 3 seeds of 5 (diagnose_gap --inject-times). Such a law is not kept; it is named
+      // "one of" with the range law whose signature correlates with it most (|r| ≥ 0.5) that
+      // earns alone. Its rival and r, or nothing.
+      std::vector<std::pair<std::string, double>> edge_rival(r.steps.size());
+      auto EdgeRival = [&](const std::string& e) -> std::pair<std::string, double> {
+        const TermFit* fit = nullptr;
+        for (const TermFit& t : current.terms)
+          if (sims.surfaces[t.term.candidate].candidate.effect == e) fit = &t;
+        if (!fit || !sims.surfaces[fit->term.candidate].candidate.range_law) return {};
+        bool edge = false;
+        for (const auto& group : fit->at_bound)
+          edge = edge || std::find(group.begin(), group.end(), 1) != group.end();
+        if (!edge) return {};
+        std::pair<std::string, double> best{"", 0.0};
+        for (const Confounded& c : sel.correlations) {
+          const std::string other = c.a == e ? c.b : c.b == e ? c.a : "";
+          if (other.empty() || !(std::fabs(c.correlation) >= 0.5) ||
+              std::fabs(c.correlation) <= std::fabs(best.second))
+            continue;
+          for (size_t j = 0; j < sel.effects.size(); ++j)
+            if (sel.effects[j].name == other && sel.effects[j].earns &&
+                sims.surfaces[j].candidate.range_law)
+              best = {other, c.correlation};
+        }
+        return best;
+      };
       for (size_t i = 0; i < r.steps.size(); ++i) {
         const std::string& e = r.steps[i].effect;
         FoldVote& w = own[i] = VoteOf(r.nested, e, own_need);
@@ -280,7 +310,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         // An effect that would be kept is then not, the others are read again without it, and
         // the pair is named "one of".
         FindRival(r.nested, sel.correlations, r.steps, e, own_need, &w);
-        if (w.earns) own_earners.push_back(e);
+        edge_rival[i] = EdgeRival(e);
+        if (w.earns && edge_rival[i].first.empty()) own_earners.push_back(e);
       }
       // Then the effects that earn their own part, together: the folds' selections restricted
       // to them, simulated again on the held-out cells. An effect a fold selected that the
@@ -339,7 +370,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           // read again without it. One dropped for too few folds is contested by its rival
           // whatever the selections earn together: that rival is not among them.
           contested[i] |= !w.rival.empty() && (held_out_earns || !w.earns);
-          keep[i] = held_out_earns && w.earns && w.rival.empty();
+          keep[i] = held_out_earns && w.earns && w.rival.empty() && edge_rival[i].first.empty();
           if (keep[i]) {
             kept.push_back(r.steps[i].effect);
             continue;
@@ -367,6 +398,10 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                                : "; " + w.rival + " chosen " + (w.earns ? "at least as" : "more") +
                                      " often, in " +
                                      std::to_string(w.rival_count) + ", r = " + Num(w.rival_r)) +
+              (edge_rival[i].first.empty()
+                   ? std::string()
+                   : "; fitted at its grid's edge, its size not determined, beside " +
+                         edge_rival[i].first + ", r = " + Num(edge_rival[i].second)) +
               ")";
         }
         if (kept.empty() || kept == together || pass == 2) {
@@ -380,6 +415,15 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       for (const SelectionStep& st : r.steps) read.push_back(st.effect);
       keep_only(keep);
       for (size_t i = 0; i < own.size(); ++i) {
+        if (!edge_rival[i].first.empty() && own[i].earns && !contested[i]) {
+          Ambiguity pair{{read[i], edge_rival[i].first}, {}, edge_rival[i].second, ""};
+          pair.sizes = sizes_of(pair.effects);
+          if (pair.sizes.size() != 2) continue;
+          pair.why = read[i] + " is fitted at its grid's edge: the law may lie beyond the grid, "
+                     "where the two are not compared, r = " + Num(edge_rival[i].second);
+          r.ambiguous.push_back(pair);
+          continue;
+        }
         if (!contested[i]) continue;
         Ambiguity rival{{read[i], own[i].rival}, {}, own[i].rival_r, ""};
         rival.sizes = sizes_of(rival.effects);

@@ -130,7 +130,9 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
 // together removed 9.2 % of the calibrated gap (10 % needed). A guard of that rule at seed 1
 // (kept at −0.908 px), not of the capability at every seed: over seeds 1–5 and 7 the offset is
 // kept at two, named "one of" with a depth scale at one, taken by the scale at one, and neither
-// kept nor named at two (docs/gap/cases.md).
+// kept nor named at two (docs/gap/cases.md). At three times its limit (−1.96 px, beyond the
+// offset's grid) the scale took it at its grid's edge at three seeds of five; such a law is now
+// named "one of" with the offset instead of kept (lib/gap/README.md, Nested hold-out).
 TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   std::vector<records::PanelMetrics> rows =
       io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
@@ -138,10 +140,25 @@ TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   ScreenRows(DesignRulesOf(base.sensor), &rows);
   DiagnoseParams params;
   params.simulate.threads = 2;
-  const std::vector<CaseOutcome> outcomes = RunRealInjectionCases(
+  const std::vector<CaseOutcome> all = RunRealInjectionCases(
       base, rows, "article", params,
-      {"article + disparity_offset (1.5 × its limit)", "article + disparity_offset (0.5 × its limit)"});
-  ASSERT_EQ(outcomes.size(), 2u);
+      {"article + disparity_offset (1.5 × its limit)", "article + disparity_offset (0.5 × its limit)",
+       "article + disparity_offset (3 × its limit)"},
+      {1.5, 0.5, 3});
+  ASSERT_EQ(all.size(), 3u);
+  // At 3 times its limit (−1.96 px, beyond the offset's nodes at ±1 px) the depth scale took it
+  // at its grid's edge (+20 %). A law fitted at its grid's edge is not kept: the pair is named.
+  const std::string& json = all[2].gap_json;
+  EXPECT_TRUE(all[2].selected.empty()) << json.substr(json.find("\"selected\""), 400);
+  const size_t why = json.find("\"why\": \"depth_scale is fitted at its grid's edge");
+  ASSERT_NE(why, std::string::npos) << json.substr(json.find("\"ambiguous\""), 800);
+  const size_t entry = json.rfind("\"one_of\": [", why);
+  ASSERT_NE(entry, std::string::npos);
+  const std::string one_of = json.substr(entry, why - entry);
+  const size_t scale = one_of.find("\"depth_scale\""), offset = one_of.find("\"disparity_offset\"");
+  EXPECT_TRUE(scale != std::string::npos && offset != std::string::npos && scale < offset)
+      << one_of;
+  const std::vector<CaseOutcome> outcomes(all.begin(), all.begin() + 2);
   for (const CaseOutcome& o : outcomes) {
     std::string recovered;
     for (const auto& [effect, size] : o.recovered) recovered += effect + ": " + size + "; ";
