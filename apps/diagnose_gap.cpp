@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <initializer_list>
 #include <cstdio>
 #include <cstdlib>
@@ -88,6 +89,12 @@ std::string DefaultProtocol() {
   return (fs::path("config") / name).string();
 }
 
+// The label a real table's injected cases are named after: its file name without extension.
+std::string TableLabel(const std::string& csv) {
+  const std::string name = io::BaseName(csv);
+  return name.substr(0, name.rfind('.'));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -122,16 +129,21 @@ int main(int argc, char** argv) {
       else if (a == "--field") real_csv = args.Value();
       else if (a == "--inject-into") inject_csvs.push_back(args.Value());
       else if (a == "--inject-times") {
-        // Multiples of a limit, separated by commas: each a number in (0, 10].
+        // Multiples of a limit, separated by commas: each a plain decimal in (0, 10], once.
         const std::string list = args.Value();
         times_given = true;
         inject_times.clear();
         std::stringstream in(list);
         for (std::string item; std::getline(in, item, ',');) {
-          char* end = nullptr;
-          const double v = std::strtod(item.c_str(), &end);
-          if (item.empty() || end != item.c_str() + item.size() || !(v > 0 && v <= 10))
+          const bool plain = !item.empty() && item.find_first_not_of("0123456789.") ==
+                                                  std::string::npos &&
+                             std::count(item.begin(), item.end(), '.') <= 1 && item.back() != '.';
+          const double v = plain ? std::strtod(item.c_str(), nullptr) : NAN;
+          if (!(v > 0 && v <= 10))
             throw BadInput("--inject-times: '" + item + "' is not a multiple in (0, 10]");
+          for (double before : inject_times)
+            if (gap::RealInjectionCaseName("", "", before) == gap::RealInjectionCaseName("", "", v))
+              throw BadInput("--inject-times: '" + item + "' is given twice");
           inject_times.push_back(v);
         }
         if (inject_times.empty() || list.back() == ',')
@@ -195,7 +207,17 @@ int main(int argc, char** argv) {
         if (it == all.end() && !real) throw BadInput("--case: no case named '" + name + "'");
         if (real && inject_csvs.empty())
           throw BadInput("--case '" + name + "' needs --inject-into REAL.csv");
-        if (real) only_real.push_back(name);
+        if (real) {  // one of the names the tables and multiples given make, before any work
+          bool known = false;
+          for (const std::string& csv : inject_csvs)
+            for (const std::string& effect : gap::RealInjectionEffects())
+              for (double t : inject_times)
+                known = known || name == gap::RealInjectionCaseName(TableLabel(csv), effect, t);
+          if (!known)
+            throw BadInput("--case: no case named '" + name + "' on the --inject-into tables at "
+                           "the --inject-times multiples");
+          only_real.push_back(name);
+        }
         if (it != all.end()) only.push_back(static_cast<int>(it - all.begin()));
       }
       std::vector<gap::CaseOutcome> outcomes;
@@ -218,16 +240,18 @@ int main(int argc, char** argv) {
                                         : std::vector<std::string>{}) {
         std::vector<records::PanelMetrics> rows = io::ReadMetricsCsv(csv);
         gap::ScreenRows(gap::DesignRulesOf(base.sensor), &rows);
-        std::string label = io::BaseName(csv);
-        label = label.substr(0, label.rfind('.'));
-        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, label, params, only_real,
-                                                                  inject_times))
+        for (gap::CaseOutcome& o : gap::RunRealInjectionCases(base, rows, TableLabel(csv), params,
+                                                                  only_real, inject_times))
           outcomes.push_back(std::move(o));
       }
+      // A case named that its table leaves out (its limit that way lies beyond its grid).
       for (const std::string& name : only_real)
         if (std::none_of(outcomes.begin(), outcomes.end(),
                          [&](const gap::CaseOutcome& o) { return o.truth.name == name; }))
-          throw BadInput("--case: no case named '" + name + "' on the --inject-into tables");
+          std::fprintf(stderr,
+                       "diagnose_gap: '%s' not injected: on its table that effect's limit lies "
+                       "beyond its grid\n",
+                       name.c_str());
       const std::vector<gap::CaseOutcome> nulls =
           nulls_too ? gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999)
                     : std::vector<gap::CaseOutcome>{};

@@ -8,7 +8,9 @@ prints, per table, effect and multiple, as a Markdown table:
 - passes: the withheld suite's criteria (selected set equal to the injected one beside the
   table's own selection, size within 20 %, 70 % of the injected part's gap removed);
 - selected as itself: the injected effect among those kept;
-- found: selected, or named "one of" a set holding it (gap.json `ambiguous`);
+- found: selected, or named "one of" a set holding it (gap.json `ambiguous`).
+  Both count an effect the table keeps or names without the injection too (the field unit's own
+  offset): only "passes" reads the injection against the table as it is;
 then the injected size at each multiple, seed by seed (the limit moves with the seed's
 simulations).
 

@@ -4,7 +4,9 @@
 # over-reading side (lib/gap/cases.h, RealInjectionCases), at each seed, then the table of
 # scripts/gap_limit_power.py (also written to OUT_DIR/power.md). The tables default to the
 # article's rows and the field unit of tests/data; about a minute a seed and table pair on 2 cores.
+# A case whose limit lies beyond its grid on a table is left out (diagnose_gap says which).
 # Usage: scripts/gap_limit_power.sh BUILD_DIR OUT_DIR [--seeds N] [--times LIST] [TABLE.csv ...]
+#   (paths from the source tree's root)
 set -euo pipefail
 trap 'echo "gap_limit_power: failed at line $LINENO" >&2' ERR
 cd "$(dirname "$0")/.."
@@ -36,6 +38,11 @@ TABLES=("${ARGS[@]:2}")
 OPTS=()
 CASES=()
 IFS=, read -r -a MULTIPLES <<< "$TIMES"
+for m in "${MULTIPLES[@]}"; do
+  # diagnose_gap names a case by the multiple as %g prints it: plain decimals only.
+  [[ "$m" =~ ^[0-9]*\.?[0-9]+$ ]] ||
+    { echo "gap_limit_power: --times: '$m' is not a plain decimal" >&2; exit 2; }
+done
 for t in "${TABLES[@]}"; do
   [ -f "$t" ] || { echo "gap_limit_power: $t: no such table" >&2; exit 2; }
   OPTS+=(--inject-into "$t")

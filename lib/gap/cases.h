@@ -93,6 +93,11 @@ WithheldCase FieldCampaignCase();
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
                                             const std::string& label,
                                             const std::vector<double>& times = {1.5, 0.5});
+// The name RealInjectionCases gives the case of `effect` at `times` its limit on table `label`.
+std::string RealInjectionCaseName(const std::string& label, const std::string& effect,
+                                  double times);
+// The effects RealInjectionCases injects (each on its over-reading side).
+const std::vector<std::string>& RealInjectionEffects();
 // Whether a case name is one RealInjectionCases gives (any multiple).
 bool IsRealInjectionCase(const std::string& name);
 // The real rows with the case's effects applied by their physics, every row alike (or those of

@@ -44,11 +44,23 @@ constexpr const char* kTimesLimit = " × its limit)";
 
 }  // namespace
 
+std::string RealInjectionCaseName(const std::string& label, const std::string& effect,
+                                  double times) {
+  char multiple[32];
+  std::snprintf(multiple, sizeof multiple, "%g", times);
+  return label + " + " + effect + " (" + multiple + kTimesLimit;
+}
+
+const std::vector<std::string>& RealInjectionEffects() {
+  static const std::vector<std::string> effects{"disparity_offset", "depth_scale"};
+  return effects;
+}
+
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
                                             const std::string& label,
                                             const std::vector<double>& times_list) {
   std::vector<WithheldCase> out;
-  for (const char* effect : {"disparity_offset", "depth_scale"}) {
+  for (const std::string& effect : RealInjectionEffects()) {
     const DetectionLimit* limit = nullptr;
     for (const DetectionLimit& e : limits.effects)
       if (e.effect == effect) limit = &e;
@@ -61,10 +73,8 @@ std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
     for (const double times : times_list) {
       if (!(times > 0 && times <= 10))
         throw std::invalid_argument("a multiple of a limit must be in (0, 10]");
-      char multiple[32];
-      std::snprintf(multiple, sizeof multiple, "%g", times);
       WithheldCase c;
-      c.name = label + " + " + effect + " (" + multiple + kTimesLimit;
+      c.name = RealInjectionCaseName(label, effect, times);
       c.family = "real";
       c.on_real = true;
       c.may_go_unseen = times < 1;

@@ -275,28 +275,39 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       // the article's rows an offset injected at 2 and 3 times its limit (−1.31 and −1.96 px,
       // beyond the offset's nodes at ±1 px) was kept as a depth scale at its edge of +20 % at
       // 2 and 3 seeds of 5 (diagnose_gap --inject-times). Such a law is not kept; it is named
-      // "one of" with the range law whose signature correlates with it most (|r| ≥ 0.5) that
-      // earns alone. Its rival and r, or nothing.
-      std::vector<std::pair<std::string, double>> edge_rival(r.steps.size());
-      auto EdgeRival = [&](const std::string& e) -> std::pair<std::string, double> {
+      // "one of" with the range law whose signature correlates with it most (|r| ≥ 0.5) and
+      // that earns alone, where the table does not keep that one. Like a rival of the folds, it is
+      // decided with the effect in the set read together, where it would be kept; without such
+      // a law it is kept as before. Its rival, r, and whether the rival's own fit alone sits at
+      // its grid's edge too; or nothing.
+      struct Edge {
+        std::string rival;
+        double r = 0;
+        bool rival_at_edge = false;
+      };
+      auto at_edge = [](const TermFit& t) {
+        for (const auto& group : t.at_bound)
+          if (std::find(group.begin(), group.end(), 1) != group.end()) return true;
+        return false;
+      };
+      std::vector<Edge> edge_rival(r.steps.size());
+      std::vector<char> edge_named(r.steps.size(), 0);
+      auto EdgeRival = [&](const std::string& e) -> Edge {
         const TermFit* fit = nullptr;
         for (const TermFit& t : current.terms)
           if (sims.surfaces[t.term.candidate].candidate.effect == e) fit = &t;
-        if (!fit || !sims.surfaces[fit->term.candidate].candidate.range_law) return {};
-        bool edge = false;
-        for (const auto& group : fit->at_bound)
-          edge = edge || std::find(group.begin(), group.end(), 1) != group.end();
-        if (!edge) return {};
-        std::pair<std::string, double> best{"", 0.0};
+        if (!fit || !sims.surfaces[fit->term.candidate].candidate.range_law || !at_edge(*fit))
+          return {};
+        Edge best;
         for (const Confounded& c : sel.correlations) {
           const std::string other = c.a == e ? c.b : c.b == e ? c.a : "";
           if (other.empty() || !(std::fabs(c.correlation) >= 0.5) ||
-              std::fabs(c.correlation) <= std::fabs(best.second))
+              std::fabs(c.correlation) <= std::fabs(best.r))
             continue;
           for (size_t j = 0; j < sel.effects.size(); ++j)
             if (sel.effects[j].name == other && sel.effects[j].earns &&
                 sims.surfaces[j].candidate.range_law)
-              best = {other, c.correlation};
+              best = {other, c.correlation, at_edge(sel.effects[j].fit)};
         }
         return best;
       };
@@ -311,7 +322,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         // the pair is named "one of".
         FindRival(r.nested, sel.correlations, r.steps, e, own_need, &w);
         edge_rival[i] = EdgeRival(e);
-        if (w.earns && edge_rival[i].first.empty()) own_earners.push_back(e);
+        if (w.earns) own_earners.push_back(e);
       }
       // Then the effects that earn their own part, together: the folds' selections restricted
       // to them, simulated again on the held-out cells. An effect a fold selected that the
@@ -370,7 +381,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           // read again without it. One dropped for too few folds is contested by its rival
           // whatever the selections earn together: that rival is not among them.
           contested[i] |= !w.rival.empty() && (held_out_earns || !w.earns);
-          keep[i] = held_out_earns && w.earns && w.rival.empty() && edge_rival[i].first.empty();
+          const bool edge = !edge_rival[i].rival.empty();
+          const bool read_together =
+              std::find(together.begin(), together.end(), r.steps[i].effect) != together.end();
+          edge_named[i] |= edge && read_together && held_out_earns && w.earns && w.rival.empty();
+          keep[i] = held_out_earns && w.earns && w.rival.empty() && !edge;
           if (keep[i]) {
             kept.push_back(r.steps[i].effect);
             continue;
@@ -398,10 +413,10 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                                : "; " + w.rival + " chosen " + (w.earns ? "at least as" : "more") +
                                      " often, in " +
                                      std::to_string(w.rival_count) + ", r = " + Num(w.rival_r)) +
-              (edge_rival[i].first.empty()
+              (edge_rival[i].rival.empty()
                    ? std::string()
                    : "; fitted at its grid's edge, its size not determined, beside " +
-                         edge_rival[i].first + ", r = " + Num(edge_rival[i].second)) +
+                         edge_rival[i].rival + ", r = " + Num(edge_rival[i].r)) +
               ")";
         }
         if (kept.empty() || kept == together || pass == 2) {
@@ -415,12 +430,22 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       for (const SelectionStep& st : r.steps) read.push_back(st.effect);
       keep_only(keep);
       for (size_t i = 0; i < own.size(); ++i) {
-        if (!edge_rival[i].first.empty() && own[i].earns && !contested[i]) {
-          Ambiguity pair{{read[i], edge_rival[i].first}, {}, edge_rival[i].second, ""};
+        const auto named_or_kept = [&](const std::string& a, const std::string& b) {
+          for (const Ambiguity& m : r.ambiguous)
+            if (std::count(m.effects.begin(), m.effects.end(), a) &&
+                std::count(m.effects.begin(), m.effects.end(), b))
+              return true;
+          return r.Selected(b);
+        };
+        if (edge_named[i] && !contested[i] && !named_or_kept(read[i], edge_rival[i].rival)) {
+          const Edge& edge = edge_rival[i];
+          Ambiguity pair{{read[i], edge.rival}, {}, edge.r, ""};
           pair.sizes = sizes_of(pair.effects);
           if (pair.sizes.size() != 2) continue;
-          pair.why = read[i] + " is fitted at its grid's edge: the law may lie beyond the grid, "
-                     "where the two are not compared, r = " + Num(edge_rival[i].second);
+          pair.why = read[i] + " is fitted at its grid's edge" +
+                     (edge.rival_at_edge ? std::string(", and so is ") + edge.rival + " alone" : "") +
+                     ": the law may lie beyond the grid, where the two are not compared, r = " +
+                     Num(edge.r);
           r.ambiguous.push_back(pair);
           continue;
         }

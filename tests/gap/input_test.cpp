@@ -156,6 +156,12 @@ TEST(DiagnoseGapInput, MessagesNameWhatIsWrong) {
       {inject + "0", "--inject-times: '0' is not a multiple in (0, 10]"},
       {inject + "11", "--inject-times: '11' is not a multiple in (0, 10]"},
       {inject + "1,,2", "--inject-times: '' is not a multiple in (0, 10]"},
+      {inject + "1e0", "--inject-times: '1e0' is not a multiple in (0, 10]"},
+      {inject + "'1, 2'", "--inject-times: ' 2' is not a multiple in (0, 10]"},
+      {inject + "1,1.0", "--inject-times: '1.0' is given twice"},
+      {inject + "2 --case 'ok + disparity_offset (1.5 × its limit)'",
+       "--case: no case named 'ok + disparity_offset (1.5 × its limit)' on the --inject-into "
+       "tables at the --inject-times multiples"},
       {inject + "1,", "--inject-times: '1,' is not a list of multiples in (0, 10]"},
       {" --cases --inject-times 2", "--inject-times goes with --inject-into"}};
   for (const auto& [args, message] : bad_times) {

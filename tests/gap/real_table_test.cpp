@@ -149,9 +149,13 @@ TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   // At 3 times its limit (−1.96 px, beyond the offset's nodes at ±1 px) the depth scale took it
   // at its grid's edge (+20 %). A law fitted at its grid's edge is not kept: the pair is named.
   const std::string& json = all[2].gap_json;
-  EXPECT_TRUE(all[2].selected.empty()) << json.substr(json.find("\"selected\""), 400);
+  auto from = [&](const char* key, size_t n) {
+    const size_t at = json.find(key);
+    return at == std::string::npos ? std::string("(no ") + key + ")" : json.substr(at, n);
+  };
+  EXPECT_TRUE(all[2].selected.empty()) << from("\"selected\"", 400);
   const size_t why = json.find("\"why\": \"depth_scale is fitted at its grid's edge");
-  ASSERT_NE(why, std::string::npos) << json.substr(json.find("\"ambiguous\""), 800);
+  ASSERT_NE(why, std::string::npos) << from("\"ambiguous\"", 800);
   const size_t entry = json.rfind("\"one_of\": [", why);
   ASSERT_NE(entry, std::string::npos);
   const std::string one_of = json.substr(entry, why - entry);
