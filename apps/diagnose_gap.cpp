@@ -20,6 +20,7 @@
 #include "memory.h"
 #include "gap/cases.h"
 #include "gap/report.h"
+#include "pipeline/gap_cache.h"
 #include "io/atomic_file.h"
 #include "io/metrics_csv.h"
 #include "io/sha256.h"
@@ -50,6 +51,10 @@ constexpr char kUsage[] =
     "                       tables without effect at S + 1999 + i)\n"
     "  --frames N           simulated frames per cell, 1 to 100000 (10)\n"
     "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n"
+    "  --cache DIR          keep the table's simulations in DIR, and take them from there\n"
+    "                       when the same cells, protocol, sensor, seed, frames and\n"
+    "                       candidates come again with this build: the same outputs, byte\n"
+    "                       for byte, without most of the time (none: simulate every run)\n"
     "  --min-effect-shrink P  an effect is kept only if the outer folds' selections, simulated,\n"
     "                       remove P % of the calibrated base's held-out gap, noise\n"
     "                       included (10)\n"
@@ -101,7 +106,7 @@ int main(int argc, char** argv) {
   apps::KeepLargeBlocksForReuse();  // the simulator's histograms: about a tenth of the run time
   FLAGS_minloglevel = google::GLOG_FATAL;  // Ceres logs through glog
   io::InstallSignalCleanup();
-  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file;
+  std::string real_csv, out_dir, protocol_file = DefaultProtocol(), sensor_file, cache_dir;
   std::vector<std::string> inject_csvs;  // --inject-into
   std::vector<double> inject_times{1.5, 0.5};  // --inject-times
   bool times_given = false;
@@ -125,6 +130,7 @@ int main(int argc, char** argv) {
       } else if (a == "--seed") base.seed = static_cast<std::uint64_t>(args.Number(true, 0, 9e15));
       else if (a == "--frames") frames = args.Number(true, 1, 1e5);
       else if (a == "--threads") threads = args.Number(true, 1, 256);
+      else if (a == "--cache") cache_dir = args.Value();
       else if (a == "--cases") cases = true;
       else if (a == "--field") real_csv = args.Value();
       else if (a == "--inject-into") inject_csvs.push_back(args.Value());
@@ -173,6 +179,15 @@ int main(int argc, char** argv) {
     if (!sensor_file.empty() && sensor_file != "builtin" &&
         !sim::ParseSensorYaml(io::ReadFile(sensor_file), &base.sensor, &why))
       throw BadInput(sensor_file + ": " + why);
+    if (!cache_dir.empty()) {  // a folder, or one to be made
+      std::error_code ec;
+      if (fs::exists(cache_dir, ec) && !fs::is_directory(cache_dir, ec))
+        throw BadInput("--cache: " + cache_dir + " is not a folder");
+      params.simulate_design = pipeline::SimulationsKeptIn(
+          cache_dir,
+          pipeline::SimulationsOrigin(protocol_file, sensor_file == "builtin" ? "" : sensor_file),
+          [](const std::string& note) { std::cerr << "diagnose_gap: note: " << note << "\n"; });
+    }
     if (!params.IsValid(&why)) throw BadInput(why);
     std::vector<gap::Candidate> candidates;
     if (!gap::SelectCandidates(params.candidates, &candidates, &why))

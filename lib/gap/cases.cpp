@@ -246,7 +246,7 @@ std::vector<CaseOutcome> RunWithheldCases(const sim::SimParams& base,
       SimulateOptions options = params.simulate;
       options.replica = static_cast<int>(design.pairs.size()) < kMinReplicatePairs;
       sims.push_back(
-          std::make_unique<Simulations>(SimulateDesign(base, design, candidates, options)));
+          std::make_unique<Simulations>(params.Simulate(base, design, candidates, options)));
       shared = sims.back().get();
     }
     const DiagnoseResult r = DiagnoseWith(design, *shared, base, params);

@@ -144,7 +144,7 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
   if (!BuildDesign(real, &design, &why)) throw std::invalid_argument(label + ": " + why);
   SimulateOptions options = params.simulate;
   options.replica = static_cast<int>(design.pairs.size()) < kMinReplicatePairs;
-  const Simulations sims = SimulateDesign(base, design, candidates, options);
+  const Simulations sims = params.Simulate(base, design, candidates, options);
   auto diagnose = [&](const std::vector<records::PanelMetrics>& rows, const std::string& name) {
     Design d;
     std::string w;

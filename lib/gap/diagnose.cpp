@@ -77,7 +77,7 @@ DiagnoseResult Diagnose(const std::vector<records::PanelMetrics>& real,
   SimulateOptions options = params.simulate;
   options.replica = static_cast<int>(design.pairs.size()) < kMinReplicatePairs;
   try {
-    const Simulations sims = SimulateDesign(base, design, candidates, options);
+    const Simulations sims = params.Simulate(base, design, candidates, options);
     return DiagnoseWith(design, sims, base, params);
   } catch (const std::exception& e) {
     r.message = e.what();

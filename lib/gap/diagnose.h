@@ -53,6 +53,7 @@
 #include "gap/limits.h"
 #include "gap/localize.h"
 #include "gap/noise.h"
+#include "gap/sim_cache.h"
 #include "gap/simulations.h"
 #include "records/panel_metrics.h"
 #include "sim/stereo_sim.h"
@@ -98,8 +99,18 @@ struct DiagnoseParams {
   // the right ones at least 38 %.
   double min_moved_shrink_pct = 20;
   double min_own_moved_shrink_pct = 30;
+  // What makes a table's simulations: SimulateDesign where empty, or a stand-in that gives the
+  // same (sim_cache.h: one that keeps them between runs).
+  SimulateDesignFn simulate_design;
 
   bool IsValid(std::string* why) const;
+  // The table's simulations, through simulate_design where it is set.
+  Simulations Simulate(const sim::SimParams& base, const Design& design,
+                       const std::vector<Candidate>& candidates,
+                       const SimulateOptions& options) const {
+    return simulate_design ? simulate_design(base, design, candidates, options)
+                           : SimulateDesign(base, design, candidates, options);
+  }
 };
 
 // The gap of a model over a set of cells: mean squared scaled gap (1 ≈ replicate noise).

@@ -14,6 +14,7 @@
 
 namespace depthbias::gap {
 
+// A field added here is added to the simulations' key (sim_cache.cpp: SimulationsKey) too.
 struct SimulateOptions {
   int frames = 10;                 // simulated frames per cell
   int threads = 2;                 // cells simulated in parallel (results do not depend on it)

@@ -1,9 +1,12 @@
 // diagnose_gap and simulate --calibrate-to run as a user runs them: bad input stops with one
 // line naming the file (exit 2), a diagnosis writes gap.json and report.md with the documented
-// keys, and the calibration writes a sensor file the simulator reads back.
+// keys, simulations kept between runs give the same outputs, and the calibration writes a
+// sensor file the simulator reads back.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -113,6 +116,80 @@ TEST(DiagnoseGapApp, WritesGapJsonAndReport) {
                     (d / "out").string(),
                 d, &err),
             2);
+}
+
+// --cache DIR: the simulations kept and taken back give the outputs of a run without it, byte
+// for byte; an entry altered with its checksum made good is read (what is in the folder is
+// what a run uses), one altered without is noted, simulated again and written over; another
+// seed is another entry; a file given as the folder stops the run.
+TEST(DiagnoseGapApp, KeptSimulationsGiveTheSameOutputs) {
+  const fs::path d = Dir("cache");
+  const fs::path in = OneScenario(d);
+  const fs::path cache = d / "kept";
+  auto run = [&](const std::string& out, const std::string& more, std::string* err) {
+    return RunCommand(Bin("diagnose_gap") + " --real " + in.string() + " --out " +
+                          (d / out).string() +
+                          " --candidates disparity_offset,edge_mixing --frames 4 --threads 2" +
+                          more,
+                      d, err);
+  };
+  std::string err;
+  ASSERT_EQ(run("plain", "", &err), 0) << err;
+  ASSERT_EQ(run("cold", " --cache " + cache.string(), &err), 0) << err;
+  EXPECT_EQ(err.find("note"), std::string::npos) << err;
+  std::vector<fs::path> entries;
+  for (const auto& e : fs::directory_iterator(cache)) entries.push_back(e.path());
+  ASSERT_EQ(entries.size(), 1u);
+  ASSERT_EQ(run("warm", " --cache " + cache.string(), &err), 0) << err;
+  EXPECT_EQ(err.find("note"), std::string::npos) << err;
+  for (const char* file : {"gap.json", "report.md"})
+    for (const char* out : {"cold", "warm"})
+      EXPECT_EQ(ReadFile(d / out / file), ReadFile(d / "plain" / file)) << out << "/" << file;
+
+  // A value altered and the checksum (FNV-1a 64 of every byte before it, its last 8 bytes) made
+  // good: the run reads it, so its outputs move.
+  const std::string bytes = ReadFile(entries[0]);
+  ASSERT_GT(bytes.size(), 200u);
+  auto with_checksum = [](std::string b) {
+    std::uint64_t h = 14695981039346656037ull;
+    for (size_t i = 0; i + 8 < b.size(); ++i) {
+      h ^= static_cast<unsigned char>(b[i]);
+      h *= 1099511628211ull;
+    }
+    std::memcpy(&b[b.size() - 8], &h, 8);
+    return b;
+  };
+  // The first cell's simulated median bias, the first value after the format's line, the key
+  // (its length, then its text) and the base's count, moved by 1 m.
+  const size_t magic = bytes.find('\n') + 1;
+  std::uint64_t key_length = 0;
+  std::memcpy(&key_length, bytes.data() + magic, 8);
+  const size_t first = magic + 8 + key_length + 8;
+  ASSERT_LT(first + 8, bytes.size());
+  double value = 0;
+  std::memcpy(&value, bytes.data() + first, 8);
+  value += 1.0;
+  std::string altered = bytes;
+  std::memcpy(&altered[first], &value, 8);
+  io::WriteFileAtomic(entries[0].string(), with_checksum(altered));
+  ASSERT_EQ(run("altered", " --cache " + cache.string(), &err), 0) << err;
+  EXPECT_NE(ReadFile(d / "altered" / "gap.json"), ReadFile(d / "plain" / "gap.json"));
+  // Altered without: noted with the file and the reason, simulated again, written over.
+  io::WriteFileAtomic(entries[0].string(), altered);
+  ASSERT_EQ(run("noted", " --cache " + cache.string(), &err), 0) << err;
+  EXPECT_NE(err.find(entries[0].string()), std::string::npos) << err;
+  EXPECT_NE(err.find("checksum"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_EQ(ReadFile(d / "noted" / "gap.json"), ReadFile(d / "plain" / "gap.json"));
+  EXPECT_EQ(ReadFile(entries[0]), bytes);
+  // Another seed, another entry.
+  ASSERT_EQ(run("seed2", " --seed 2 --cache " + cache.string(), &err), 0) << err;
+  EXPECT_EQ(std::distance(fs::directory_iterator(cache), fs::directory_iterator()), 2);
+  // A file as the folder: one line naming it, exit 2, nothing written.
+  EXPECT_EQ(run("file", " --cache " + (d / "sunset_hd.csv").string(), &err), 2);
+  EXPECT_NE(err.find("sunset_hd.csv"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_FALSE(fs::exists(d / "file" / "gap.json"));
 }
 
 TEST(SimulateApp, CalibrateToWritesASensorTheSimulatorReads) {

@@ -1,11 +1,12 @@
 // The parts of the gap diagnosis against known truth: interpolation, the table's checks and
 // folds, the noise from replicates, the shares of the gap by factor, the χ² tail, the JSON text,
-// and the region_spill effect's signature in the simulator.
+// the region_spill effect's signature in the simulator, and a table's simulations kept as bytes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <map>
 #include <random>
@@ -21,9 +22,11 @@
 #include "gap/noise.h"
 #include "gap/placement.h"
 #include "gap/select.h"
+#include "gap/sim_cache.h"
 #include "gap/simulations.h"
 #include "gap/smooth.h"
 #include "gap/unexplained.h"
+#include "sim/config_yaml.h"
 #include "sim/sim_metrics.h"
 #include "sim/stereo_sim.h"
 
@@ -374,6 +377,112 @@ TEST(Simulations, ARegionSpillNodeIsTheWholeTableSimulatedAtThatWidth) {
       EXPECT_FALSE(at_defaults.SameButSpill(b)) << e.name << "'s " << param.name << " moved";
     }
   }
+}
+
+// Two vectors of the same values, bit for bit (NaN included).
+bool SameBits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+}
+
+// A table's simulations as bytes and back (sim_cache.h): every value the same, bit for bit, and
+// the parts SimulateDesign makes from the design, sensor and candidates made again.
+TEST(SimulationsKept, DecodedSimulationsAreTheSimulationsBitForBit) {
+  const sim::SimParams p = FallbackSensor(31);
+  const std::vector<records::PanelMetrics> rows = Twins({4, 16}, 35, "HA");
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  std::vector<Candidate> cand;
+  ASSERT_TRUE(SelectCandidates("disparity_offset,region_spill", &cand, &why)) << why;
+  SimulateOptions options;
+  options.frames = 2;
+  options.replica = true;
+  const Simulations s = SimulateDesign(p, d, cand, options);
+  const std::string key = SimulationsKey("protocol x", p, d, cand, options);
+  ASSERT_FALSE(key.empty());
+  const std::string bytes = EncodeSimulations(s, key);
+  Simulations back;
+  ASSERT_TRUE(DecodeSimulations(bytes, key, p, d, cand, &back, &why)) << why;
+  for (auto m : {&Simulations::base, &Simulations::depth_m, &Simulations::jac_log_sigma,
+                 &Simulations::jac_logit_p, &Simulations::replica, &Simulations::shifted,
+                 &Simulations::moved})
+    EXPECT_TRUE(SameBits(s.*m, back.*m));
+  EXPECT_FALSE(back.replica.empty());
+  EXPECT_EQ(back.moved_rel, s.moved_rel);
+  EXPECT_EQ(back.runs, s.runs);
+  EXPECT_EQ(back.cell_names, s.cell_names);
+  EXPECT_EQ(back.metrics, s.metrics);
+  EXPECT_EQ(FormatSensorYaml(back.sensor, {}), FormatSensorYaml(s.sensor, {}));
+  ASSERT_EQ(back.surfaces.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back.surfaces[i].candidate.effect, cand[i].effect);
+    EXPECT_EQ(back.surfaces[i].num_nodes, s.surfaces[i].num_nodes);
+    EXPECT_TRUE(SameBits(back.surfaces[i].table, s.surfaces[i].table));
+  }
+  EXPECT_TRUE(back.Matches(d));
+
+  // Refused, each with its reason: another key, a byte altered, the end cut, another format,
+  // other candidates.
+  auto refused = [&](const std::string& b, const std::string& k,
+                     const std::vector<Candidate>& c) {
+    Simulations out;
+    std::string reason;
+    EXPECT_FALSE(DecodeSimulations(b, k, p, d, c, &out, &reason));
+    return reason;
+  };
+  EXPECT_NE(refused(bytes, key + " ", cand).find("other cells"), std::string::npos);
+  std::string altered = bytes;
+  altered[altered.size() / 2] ^= 4;
+  EXPECT_NE(refused(altered, key, cand).find("checksum"), std::string::npos);
+  EXPECT_NE(refused(bytes.substr(0, bytes.size() - 9), key, cand).find("checksum"),
+            std::string::npos);
+  EXPECT_NE(refused("", key, cand).find("not a depthbias"), std::string::npos);
+  EXPECT_NE(refused("depthbias gap simulations 0\n" + bytes, key, cand).find("not a depthbias"),
+            std::string::npos);
+  EXPECT_NE(refused(bytes, key, {cand[0]}).find("surfaces for"), std::string::npos);
+}
+
+// The key names what the simulations are made of, and nothing else: the threads change no
+// result and no key; the origin, seed, frames, a cell, a candidate's grid and the sensor each
+// make another key; no origin, or a base with departures of its own, none.
+TEST(SimulationsKept, TheKeyNamesWhatTheSimulationsAreMadeOf) {
+  const sim::SimParams p = FallbackSensor(31);
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(Twins({4, 16}, 35, "HA"), &d, &why)) << why;
+  std::vector<Candidate> cand;
+  ASSERT_TRUE(SelectCandidates("disparity_offset", &cand, &why)) << why;
+  const SimulateOptions options;
+  const std::string key = SimulationsKey("protocol x", p, d, cand, options);
+  ASSERT_FALSE(key.empty());
+  SimulateOptions threads = options;
+  threads.threads = options.threads + 3;
+  EXPECT_EQ(SimulationsKey("protocol x", p, d, cand, threads), key);
+  std::set<std::string> keys{key};
+  keys.insert(SimulationsKey("protocol y", p, d, cand, options));
+  sim::SimParams seed = p;
+  seed.seed = p.seed + 1;
+  keys.insert(SimulationsKey("protocol x", seed, d, cand, options));
+  SimulateOptions frames = options;
+  frames.frames = options.frames + 1;
+  keys.insert(SimulationsKey("protocol x", p, d, cand, frames));
+  Design moved = d;
+  moved.cells[1].distance_m += 1e-9;
+  keys.insert(SimulationsKey("protocol x", p, moved, cand, options));
+  std::vector<Candidate> other = cand;
+  other[0].axes[0].nodes.back() += 1e-9;
+  keys.insert(SimulationsKey("protocol x", p, d, other, options));
+  sim::SimParams sensor = p;
+  sensor.sensor.fallback.sigma_d_px *= 1.01;
+  keys.insert(SimulationsKey("protocol x", sensor, d, cand, options));
+  EXPECT_EQ(keys.size(), 7u);
+  EXPECT_EQ(SimulationsKey("", p, d, cand, options), "");
+  sim::SimParams departed = p;
+  ASSERT_TRUE(sim::BuildDepartures({{"disparity_offset", {{"delta_px", 0.1}}}},
+                                   &departed.departures, &why))
+      << why;
+  EXPECT_EQ(SimulationsKey("protocol x", departed, d, cand, options), "");
 }
 
 // A simulation that reads every metric but the median bias as the real one (and the median bias
