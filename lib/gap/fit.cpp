@@ -1,4 +1,5 @@
 #include "gap/fit.h"
+#include "gap/robust_covariance.h"
 
 #include <algorithm>
 #include <array>
@@ -90,6 +91,7 @@ class GapCost : public ceres::CostFunction {
     PrepareCalibration();
   }
 
+  const std::vector<size_t>& obs() const { return obs_; }  // the data rows' observations
   // Whitening block w (L⁻¹ lower triangular) applied to one column (rows `stride` apart).
   void Whiten(size_t w, double* col, size_t stride, double* tmp) const {
     const int st = white_.starts[w], n = white_.starts[w + 1] - st;
@@ -342,10 +344,7 @@ double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<c
       sum += rr * rr;
       block += rr * rr;
     }
-    if (per_unit) {
-      const size_t o = w.obs[st];
-      (*per_unit)[block_[o] >= 0 ? block_[o] : -1 - static_cast<long long>(o / k_count)] += block;
-    }
+    if (per_unit) (*per_unit)[Unit(w.obs[st])] += block;
   }
   return sum;
 }
@@ -512,6 +511,14 @@ ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
       const Eigen::MatrixXd inv = cod.pseudoInverse();
       for (size_t a = 0; a < free.size(); ++a)
         for (size_t b = 0; b < free.size(); ++b) var(free[a], free[b]) = inv(a, b);
+      // An effect's variance: the wider of the model's and the sandwich's (robust_covariance.h).
+      std::vector<long long> unit;
+      for (size_t o : cost->obs()) unit.push_back(model.Unit(o));
+      const Eigen::MatrixXd robust = ClusterRobustCovariance(inv, jf, residuals, unit);
+      for (size_t a = 0; a < free.size(); ++a)
+        if (layout.blocks[std::upper_bound(offset.begin(), offset.end(), free[a]) -
+                          offset.begin() - 1].term >= 0)
+          var(free[a], free[a]) = std::fmax(var(free[a], free[a]), robust(a, a));
     }
   }
   fit.data_deviance = 0;

@@ -74,8 +74,10 @@ struct Term {
 struct TermFit {
   Term term;
   std::vector<std::vector<double>> values;  // [group][axis], natural units
-  // 95 % interval [group][axis]; a discrete axis: its value, or where `profiled`, the hull of
-  // the nodes its profile over the nodes keeps (the diagnosis's selected terms).
+  // 95 % interval [group][axis]: a continuous axis ± 1.96 times the wider of the fit's own
+  // standard error and the sandwich's over the test points (robust_covariance.h); a discrete
+  // axis its value, or where `profiled`, the hull of the nodes its profile over the nodes keeps
+  // (the diagnosis's selected terms).
   std::vector<std::vector<double>> ci_lo;
   std::vector<std::vector<double>> ci_hi;
   bool profiled = false;
@@ -163,6 +165,11 @@ class GapModel {
   // placement its recordings share), or a recording without one (key −1 − cell).
   double DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells,
                       std::map<long long, double>* per_unit = nullptr) const;
+  // The independent unit of an observation: its test point (≥ 0), or its recording alone
+  // (−1 − cell) where there is no placement estimate.
+  long long Unit(size_t obs) const {
+    return block_[obs] >= 0 ? block_[obs] : -1 - static_cast<long long>(obs / num_metrics());
+  }
 
  private:
   const Design& design_;

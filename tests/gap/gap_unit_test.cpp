@@ -21,6 +21,7 @@
 #include "gap/localize.h"
 #include "gap/noise.h"
 #include "gap/placement.h"
+#include "gap/robust_covariance.h"
 #include "gap/select.h"
 #include "gap/sim_cache.h"
 #include "gap/simulations.h"
@@ -483,6 +484,25 @@ TEST(SimulationsKept, TheKeyNamesWhatTheSimulationsAreMadeOf) {
                                    &departed.departures, &why))
       << why;
   EXPECT_EQ(SimulationsKey("protocol x", departed, d, cand, options), "");
+}
+
+// The sandwich over units (robust_covariance.h), worked out by hand on a mean: J a column of
+// ones over n rows, H⁻¹ = 1/n, so the variance is G/(G − 1) · Σ_u (Σ_{i∈u} r_i)² / n². Rows of
+// one unit that move together count once: three units of two rows each, every pair equal,
+// give twice the variance of the same six residuals in six units (2.5 times with the factors
+// 3/2 and 6/5). A prior row beyond the data is left out; one unit gives NaN.
+TEST(RobustCovariance, CountsRowsThatMoveTogetherOnce) {
+  const std::vector<double> r{0.5, 0.5, -1.0, -1.0, 0.25, 0.25};
+  const Eigen::MatrixXd inv = Eigen::MatrixXd::Constant(1, 1, 1.0 / 6);
+  Eigen::MatrixXd j = Eigen::MatrixXd::Ones(7, 1);  // the last row a prior's
+  const Eigen::MatrixXd paired = ClusterRobustCovariance(inv, j, r, {0, 0, 1, 1, 2, 2});
+  const double sums = 1.0 + 4.0 + 0.25;  // (0.5 + 0.5)², (−2)², (0.5)²
+  EXPECT_NEAR(paired(0, 0), 3.0 / 2.0 * sums / 36.0, 1e-15);
+  const Eigen::MatrixXd alone = ClusterRobustCovariance(inv, j, r, {0, 1, 2, 3, 4, 5});
+  const double squares = 2 * (0.25 + 1.0 + 0.0625);
+  EXPECT_NEAR(alone(0, 0), 6.0 / 5.0 * squares / 36.0, 1e-15);
+  EXPECT_NEAR(paired(0, 0), 2.5 * alone(0, 0), 1e-15);
+  EXPECT_TRUE(std::isnan(ClusterRobustCovariance(inv, j, r, {4, 4, 4, 4, 4, 4})(0, 0)));
 }
 
 // A simulation that reads every metric but the median bias as the real one (and the median bias
