@@ -23,11 +23,14 @@ for b in "$APP" "$SIM"; do
 done
 REPEAT=${REPEAT:-3}
 bench_positive_int REPEAT "$REPEAT"
+# The kept simulations go to a folder of the script's own, removed at the end.
+CACHE_DIR=$(mktemp -d /tmp/bench_diagnose_gap_cache.XXXXXX)
 if [ -n "${OUT_DIR:-}" ]; then  # the user's folder: written into, never removed
   mkdir -p "$OUT_DIR"
+  trap 'rm -rf "$CACHE_DIR"' EXIT
 else
   OUT_DIR=$(mktemp -d /tmp/bench_diagnose_gap.XXXXXX)
-  trap 'rm -rf "$OUT_DIR"' EXIT
+  trap 'rm -rf "$OUT_DIR" "$CACHE_DIR"' EXIT
 fi
 REAL=config/data/paper_d455_outdoor.csv
 
@@ -46,10 +49,9 @@ for ((i = 0; i < REPEAT; i++)); do
 done
 # The same diagnosis with its simulations kept (--cache): one run that simulates and keeps them,
 # then REPEAT that take them back; their outputs must be the cold run's, byte for byte.
-rm -rf "$OUT_DIR/cache"
-keeping=$(timed "$APP" --real "$REAL" --out "$OUT_DIR/keeping" --cache "$OUT_DIR/cache")
+keeping=$(timed "$APP" --real "$REAL" --out "$OUT_DIR/keeping" --cache "$CACHE_DIR")
 for ((i = 0; i < REPEAT; i++)); do
-  kept+=("$(timed "$APP" --real "$REAL" --out "$OUT_DIR/kept" --cache "$OUT_DIR/cache")")
+  kept+=("$(timed "$APP" --real "$REAL" --out "$OUT_DIR/kept" --cache "$CACHE_DIR")")
 done
 for f in gap.json report.md; do
   for run in keeping kept; do

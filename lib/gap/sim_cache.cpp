@@ -135,6 +135,7 @@ std::string SimulationsKey(const std::string& origin, const sim::SimParams& base
 }
 
 std::string EncodeSimulations(const Simulations& s, const std::string& key) {
+  if (!LittleEndian()) return "";
   Writer w;
   w.bytes() = kMagic;
   w.Text(key);

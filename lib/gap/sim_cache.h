@@ -8,7 +8,8 @@
 //
 // The key is a text that names everything the simulations are made from: the caller's origin
 // (what the base parameters were read from: the protocol's and sensor's bytes, and the build of
-// the program), the seed, the sensor as parsed, the options but the threads (which change no
+// the program), the seed, the sensor as written back (sim::FormatSensorYaml; the origin's
+// sensor bytes hold the rest), the options but the threads (which change no
 // result), every cell, the metrics and every candidate's grid. Encoded simulations carry their
 // key and a checksum; decoding checks both and every size against the design and candidates,
 // so a stale, truncated or altered entry is refused with a reason, never read. Values are
@@ -41,7 +42,8 @@ std::string SimulationsKey(const std::string& origin, const sim::SimParams& base
                            const Design& design, const std::vector<Candidate>& candidates,
                            const SimulateOptions& options);
 
-// The simulations as bytes, with their key.
+// The simulations as bytes, with their key ("" on a machine that is not little-endian, whose
+// bytes the format does not describe).
 std::string EncodeSimulations(const Simulations& sims, const std::string& key);
 
 // The simulations back from EncodeSimulations's bytes, made whole from the design, the base

@@ -1,15 +1,13 @@
 #include "pipeline/gap_cache.h"
 
 #include <exception>
-#include <filesystem>
-#include <system_error>
+#include <stdexcept>
 #include <utility>
 
-#include "io/atomic_file.h"
+#include "io/entry_store.h"
 #include "io/sha256.h"
 
 namespace depthbias::pipeline {
-namespace fs = std::filesystem;
 
 gap::SimulateDesignFn SimulationsKeptIn(const std::string& dir, const std::string& origin,
                                         std::function<void(const std::string&)> note) {
@@ -18,27 +16,24 @@ gap::SimulateDesignFn SimulationsKeptIn(const std::string& dir, const std::strin
                                                const gap::SimulateOptions& options) {
     const std::string key = gap::SimulationsKey(origin, base, d, candidates, options);
     if (key.empty()) return gap::SimulateDesign(base, d, candidates, options);
-    const std::string path =
-        (fs::path(dir) / (io::Sha256Hex(key).substr(0, 32) + ".sims")).string();
-    std::error_code ec;
-    if (fs::exists(path, ec)) {
-      std::string why;
-      try {
-        gap::Simulations kept;
-        // 1024 rows of every candidate's grid are about 8 MB.
-        if (gap::DecodeSimulations(io::ReadFile(path, 1ull << 30), key, base, d, candidates,
-                                   &kept, &why))
-          return kept;
-        why = path + ": " + why;
-      } catch (const std::exception& e) {
-        why = e.what();
+    const std::string name = io::Sha256Hex(key).substr(0, 32) + ".sims";
+    const std::string path = dir + "/" + name;
+    try {
+      std::string bytes, why;
+      gap::Simulations kept;
+      // 1024 rows of every candidate's grid are about 8 MB.
+      if (io::ReadEntry(dir, name, 1ull << 30, &bytes)) {
+        if (gap::DecodeSimulations(bytes, key, base, d, candidates, &kept, &why)) return kept;
+        if (note) note(path + ": " + why + "; simulated again");
       }
-      if (note) note(why + "; simulated again");
+    } catch (const std::exception& e) {
+      if (note) note(std::string(e.what()) + "; simulated again");
     }
     gap::Simulations made = gap::SimulateDesign(base, d, candidates, options);
     try {
-      fs::create_directories(dir);
-      io::WriteFileAtomic(path, gap::EncodeSimulations(made, key));
+      const std::string bytes = gap::EncodeSimulations(made, key);
+      if (bytes.empty()) throw std::runtime_error("this machine is not little-endian");
+      io::WriteEntry(dir, name, bytes);
     } catch (const std::exception& e) {
       if (note) note(std::string("simulations not kept: ") + e.what());
     }
@@ -50,8 +45,8 @@ std::string SimulationsOrigin(const std::string& protocol_file, const std::strin
   auto digest = [](const std::string& path) {
     return path.empty() ? std::string("none") : io::Sha256File(path);
   };
-  return "program " + io::Sha256File("/proc/self/exe") + "; protocol " + digest(protocol_file) +
-         "; sensor " + digest(sensor_file);
+  return "protocol " + digest(protocol_file) + "; sensor " + digest(sensor_file) +
+         "; program\n" + io::ProgramFilesDigest();
 }
 
 }  // namespace depthbias::pipeline

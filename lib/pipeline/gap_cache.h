@@ -19,9 +19,10 @@ namespace depthbias::pipeline {
 gap::SimulateDesignFn SimulationsKeptIn(const std::string& dir, const std::string& origin,
                                         std::function<void(const std::string&)> note);
 
-// The origin of a diagnosis's simulations: this program's build (the SHA-256 of its own
-// executable) and the bytes of the protocol and sensor files its base parameters were read from
-// ("" for a file not given). Throws io::IoError when a file cannot be read.
+// The origin of a diagnosis's simulations: the bytes of the protocol and sensor files its base
+// parameters were read from ("" for a file not given) and this program's build (the SHA-256 of
+// its executable and of every shared library mapped into it: io::ProgramFilesDigest). Throws
+// io::IoError when one cannot be read.
 std::string SimulationsOrigin(const std::string& protocol_file, const std::string& sensor_file);
 
 }  // namespace depthbias::pipeline

@@ -442,6 +442,22 @@ TEST(SimulationsKept, DecodedSimulationsAreTheSimulationsBitForBit) {
   EXPECT_NE(refused("depthbias gap simulations 0\n" + bytes, key, cand).find("not a depthbias"),
             std::string::npos);
   EXPECT_NE(refused(bytes, key, {cand[0]}).find("surfaces for"), std::string::npos);
+  // Whole and checked, but of other sizes than the design's and the candidates' grids.
+  Simulations shorter = s;
+  shorter.moved.pop_back();
+  EXPECT_NE(refused(EncodeSimulations(shorter, key), key, cand).find("moved holds"),
+            std::string::npos);
+  Simulations fewer = s;
+  fewer.surfaces[1].table.resize(fewer.surfaces[1].table.size() - 1);
+  EXPECT_NE(refused(EncodeSimulations(fewer, key), key, cand).find("does not fit"),
+            std::string::npos);
+  Simulations no_replica = s;
+  no_replica.replica.clear();  // a part that may be absent
+  Simulations decoded;
+  EXPECT_TRUE(DecodeSimulations(EncodeSimulations(no_replica, key), key, p, d, cand, &decoded,
+                                &why))
+      << why;
+  EXPECT_TRUE(decoded.replica.empty());
 }
 
 // The key names what the simulations are made of, and nothing else: the threads change no
@@ -478,6 +494,50 @@ TEST(SimulationsKept, TheKeyNamesWhatTheSimulationsAreMadeOf) {
   sensor.sensor.fallback.sigma_d_px *= 1.01;
   keys.insert(SimulationsKey("protocol x", sensor, d, cand, options));
   EXPECT_EQ(keys.size(), 7u);
+  // Every other option, a cell's every field, the metrics and an axis's every field.
+  const std::vector<std::function<void(SimulateOptions&)>> option_changes{
+      [](SimulateOptions& o) { o.region_margin_px += 0.25; },
+      [](SimulateOptions& o) { o.step_log_sigma *= 2; },
+      [](SimulateOptions& o) { o.step_logit_p *= 2; },
+      [](SimulateOptions& o) { o.replica = !o.replica; },
+      [](SimulateOptions& o) { o.shift_px += 0.5; },
+      [](SimulateOptions& o) { o.dither_quantization = !o.dither_quantization; },
+      [](SimulateOptions& o) { o.placement_probe *= 2; }};
+  for (const auto& change : option_changes) {
+    SimulateOptions o = options;
+    change(o);
+    keys.insert(SimulationsKey("protocol x", p, d, cand, o));
+  }
+  const std::vector<std::function<void(Design&)>> design_changes{
+      [](Design& x) { x.cells[0].angle_deg += 1; },
+      [](Design& x) { x.cells[0].preset = "HD"; },
+      [](Design& x) { x.cells[0].emitter_on = !x.cells[0].emitter_on; },
+      [](Design& x) { x.cells[0].light = "sunset"; },
+      [](Design& x) { x.cells[0].name += "_"; },
+      [](Design& x) { x.cells[0].panel = !x.cells[0].panel; },
+      [](Design& x) { x.metrics.pop_back(); }};
+  for (const auto& change : design_changes) {
+    Design x = d;
+    change(x);
+    keys.insert(SimulationsKey("protocol x", p, x, cand, options));
+  }
+  const std::vector<std::function<void(Candidate&)>> candidate_changes{
+      [](Candidate& c) { c.range_law = !c.range_law; },
+      [](Candidate& c) { c.effect = "depth_scale"; },
+      [](Candidate& c) { c.axes[0].param = "x"; },
+      [](Candidate& c) { c.axes[0].neutral += 1; },
+      [](Candidate& c) { c.axes[0].discrete = !c.axes[0].discrete; },
+      [](Candidate& c) { c.axes[0].log_scale = !c.axes[0].log_scale; },
+      [](Candidate& c) { c.axes[0].reference += 1; },
+      [](Candidate& c) { c.axes[0].min_value = -5; },
+      [](Candidate& c) { c.axes[0].max_value = 5; }};
+  for (const auto& change : candidate_changes) {
+    std::vector<Candidate> x = cand;
+    change(x[0]);
+    keys.insert(SimulationsKey("protocol x", p, d, x, options));
+  }
+  EXPECT_EQ(keys.size(), 7u + option_changes.size() + design_changes.size() +
+                             candidate_changes.size());
   EXPECT_EQ(SimulationsKey("", p, d, cand, options), "");
   sim::SimParams departed = p;
   ASSERT_TRUE(sim::BuildDepartures({{"disparity_offset", {{"delta_px", 0.1}}}},
@@ -492,9 +552,9 @@ TEST(SimulationsKept, TheKeyNamesWhatTheSimulationsAreMadeOf) {
 // give twice the variance of the same six residuals in six units (2.5 times with the factors
 // 3/2 and 6/5). A prior row beyond the data is left out; one unit gives NaN.
 TEST(RobustCovariance, CountsRowsThatMoveTogetherOnce) {
-  const std::vector<double> r{0.5, 0.5, -1.0, -1.0, 0.25, 0.25};
+  const std::vector<double> r{0.5, 0.5, -1.0, -1.0, 0.25, 0.25, 10.0};  // the last a prior's
   const Eigen::MatrixXd inv = Eigen::MatrixXd::Constant(1, 1, 1.0 / 6);
-  Eigen::MatrixXd j = Eigen::MatrixXd::Ones(7, 1);  // the last row a prior's
+  const Eigen::MatrixXd j = Eigen::MatrixXd::Ones(7, 1);
   const Eigen::MatrixXd paired = ClusterRobustCovariance(inv, j, r, {0, 0, 1, 1, 2, 2});
   const double sums = 1.0 + 4.0 + 0.25;  // (0.5 + 0.5)², (−2)², (0.5)²
   EXPECT_NEAR(paired(0, 0), 3.0 / 2.0 * sums / 36.0, 1e-15);
@@ -1043,6 +1103,36 @@ LimitTable MakeLimitTable(
                                 })
                           : nullptr),
       offset, [](const std::vector<double>& v, double dist) { return OffsetLaw(v[0], dist); });
+}
+
+// An effect's interval counts a test point once (robust_covariance.h, through FitTerms): on
+// PlacedGrid's rows, whose four recordings of a test point share its placement draw, with the
+// placement scatter taken as 0 (the model then weighs each recording as independent), a shared
+// offset's interval over test points (the placement estimate's units) is about √4 times as wide
+// as over recordings (no placement estimate: each recording its own unit). The fit is the same.
+TEST(RobustCovariance, AnEffectsIntervalCountsATestPointOnce) {
+  const LimitTable t = MakeLimitTable(9, [](const records::PanelMetrics&) { return 0.2; });
+  PlacementEstimate no_scatter = t.pe;
+  for (auto& row : no_scatter.tau) std::fill(row.begin(), row.end(), 0.0);
+  FitSettings fs;
+  fs.huber_k = 0;
+  const std::vector<char> all(t.d.num_cells(), 1);
+  auto width = [&](const PlacementEstimate* pe, double* value) -> double {
+    const GapModel model(t.d, t.s, t.n, fs, pe);
+    const ModelFit f = FitCandidate(model, 0, Scope::kShared, all);
+    EXPECT_TRUE(f.success) << f.message;
+    if (!f.success) return NAN;
+    *value = f.terms[0].values[0][0];
+    return f.terms[0].ci_hi[0][0] - f.terms[0].ci_lo[0][0];
+  };
+  double by_point_value = 0, by_recording_value = 1;
+  const double by_point = width(&no_scatter, &by_point_value);
+  const double by_recording = width(nullptr, &by_recording_value);
+  std::printf("offset %.4f px: interval width over test points %.4f, over recordings %.4f\n",
+              by_point_value, by_point, by_recording);
+  EXPECT_NEAR(by_point_value, by_recording_value, 1e-9);
+  EXPECT_GT(by_point, 1.5 * by_recording);
+  EXPECT_LT(by_point, 3.0 * by_recording);
 }
 
 // Scopes (fit.h). An offset of 0.3 px in the sunset rows alone, both presets alike: fitted per

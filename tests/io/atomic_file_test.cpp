@@ -5,6 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <sstream>
+
+#include "io/entry_store.h"
 #include "io/sha256.h"
 #include "test_dir.h"
 
@@ -144,6 +148,49 @@ TEST(AtomicFile, TwoRunsWritingTheSameSetNeverLeaveAMixedPair) {
   EXPECT_EQ(mixed, 0) << "of " << seen << " looks";
   EXPECT_EQ(stem(ReadFile(a)), stem(ReadFile(b)));
   EXPECT_EQ(CountFiles(dir), 2);  // no temporary file left
+}
+
+// A folder of entries kept between runs: a missing entry or folder is no error, an entry is
+// written whole with its folder made first, and something that is not a file is refused by name.
+TEST(EntryStore, ReadsWhatItWroteAndTellsAMissingEntry) {
+  const auto dir = FreshDir("io");
+  const std::string folder = (dir / "kept" / "deeper").string();
+  std::string bytes = "unchanged";
+  EXPECT_FALSE(ReadEntry(folder, "a.sims", 1 << 20, &bytes));
+  EXPECT_EQ(bytes, "unchanged");
+  WriteEntry(folder, "a.sims", std::string("\0bytes\n", 7));
+  ASSERT_TRUE(ReadEntry(folder, "a.sims", 1 << 20, &bytes));
+  EXPECT_EQ(bytes, std::string("\0bytes\n", 7));
+  std::filesystem::create_directories(std::filesystem::path(folder) / "b.sims");
+  try {
+    ReadEntry(folder, "b.sims", 1 << 20, &bytes);
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("b.sims"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(WriteEntry((dir / "kept" / "deeper" / "a.sims").string(), "c.sims", "x"),
+               IoError);  // a file where the folder should be
+}
+
+// The program as files: its executable and the shared libraries it runs with, each with its
+// SHA-256, in path order.
+TEST(EntryStore, ProgramFilesDigestNamesTheExecutableAndItsLibraries) {
+  const std::string digest = ProgramFilesDigest();
+  std::istringstream in(digest);
+  int lines = 0, libraries = 0;
+  bool executable = false;
+  std::string last;
+  for (std::string line; std::getline(in, line); ++lines) {
+    ASSERT_GT(line.size(), 66u) << line;
+    EXPECT_EQ(line.find_first_not_of("0123456789abcdef"), 64u) << line;
+    const std::string path = line.substr(65);
+    EXPECT_LT(last, path);
+    last = path;
+    executable = executable || path == std::filesystem::read_symlink("/proc/self/exe").string();
+    libraries += path.find(".so") != std::string::npos;
+  }
+  EXPECT_TRUE(executable) << digest;
+  EXPECT_GE(libraries, 2) << digest;  // the C and C++ runtimes at least
 }
 
 }  // namespace
