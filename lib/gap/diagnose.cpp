@@ -512,6 +512,15 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
     GapModel at_phi = model;  // the selection's dispersion
     at_phi.SetDispersion(r.dispersion);
     r.size_spread = SpreadOverFolds(at_phi, fold, r.folds, &r.selected);
+    // Every effect listed the same, alone: the fit's own interval reads low where few test
+    // points carry an effect (a range law at the far distance: lib/gap/README.md).
+    for (EffectResult& e : r.effects) {
+      ModelFit alone;
+      alone.terms = {e.fit};
+      SpreadOverFolds(at_phi, fold, r.folds, &alone);
+      e.fit.ci_lo = alone.terms[0].ci_lo;
+      e.fit.ci_hi = alone.terms[0].ci_hi;
+    }
     ProfileDiscreteAxes(at_phi, all, &r.selected);
     // The shares an effect must remove, of the gaps the keep rule reads (above): each outer
     // fold's calibrated base simulated on its held-out cells, or the table's calibrated gap
