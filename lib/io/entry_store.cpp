@@ -29,7 +29,10 @@ void WriteEntry(const std::string& dir, const std::string& name, const std::stri
 }
 
 std::string ProgramFilesDigest() {
-  std::set<std::string> files{fs::read_symlink("/proc/self/exe").string()};
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw IoError("/proc/self/exe: cannot read the link: " + ec.message());
+  std::set<std::string> files{exe.string()};
   std::istringstream maps(ReadFile("/proc/self/maps", 16ull << 20));
   // address perms offset dev inode path
   for (std::string line; std::getline(maps, line);) {
