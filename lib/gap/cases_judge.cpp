@@ -380,8 +380,11 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   // An injected effect the table cannot tell from the calibration (a gain on σ_d or on the hole
   // probability, where each scenario's σ_d and p are calibrated) is never selected: it is
   // answered when gap.json names it "one of" with the calibration, with the size it would need
-  // (per scenario, in the calibration's scenario order, or one shared value).
+  // (per scenario, in the calibration's scenario order, or one shared value). Beside a selection,
+  // the selected sizes are then those read with it the cause (selection_with), where there is
+  // one such effect: a drift's median shift is the offset's to give back.
   std::map<std::string, std::vector<double>> aliased;
+  std::map<std::string, const Json*> branch;
   if (const Json* amb = root.Find("ambiguous"))
     for (const Json& a : amb->items) {
       const Json* one = a.Find("one_of");
@@ -401,8 +404,12 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
           if (end != w.c_str() && *end == '\0') v.push_back(x);
         }
         aliased[name] = v;
+        if (const Json* with = a.Find("selection_with")) branch[name] = with;
       }
     }
+  if (aliased.size() == 1 && branch.size() == 1)
+    for (const auto& [effect, params] : branch.begin()->second->members)
+      if (fitted.count(effect)) fitted[effect] = &params;
   std::set<std::string> answered = got;
   for (const auto& [name, v] : aliased) answered.insert(name);
   if (answered != want) fail("selected set differs from the injected set");

@@ -439,7 +439,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         };
         if (edge_named[i] && !contested[i] && !named_or_kept(read[i], edge_rival[i].rival)) {
           const Edge& edge = edge_rival[i];
-          Ambiguity pair{{read[i], edge.rival}, {}, edge.r, ""};
+          Ambiguity pair{{read[i], edge.rival}, {}, edge.r, "", {}};
           pair.sizes = sizes_of(pair.effects);
           if (pair.sizes.size() != 2) continue;
           pair.why = read[i] + " is fitted at its grid's edge" +
@@ -450,7 +450,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           continue;
         }
         if (!contested[i]) continue;
-        Ambiguity rival{{read[i], own[i].rival}, {}, own[i].rival_r, ""};
+        Ambiguity rival{{read[i], own[i].rival}, {}, own[i].rival_r, "", {}};
         rival.sizes = sizes_of(rival.effects);
         if (rival.sizes.size() != 2) continue;
         rival.why = "the outer folds choose " + own[i].rival +
@@ -479,10 +479,14 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       for (int s = 0; s < design.num_scenarios(); ++s)
         need += (s ? " / " : "") +
                 Num(sigma ? r.calibrated[s].sigma_d_px : r.calibrated[s].invalid_prob);
-      r.ambiguous.push_back({{e.name, sigma ? "calibration:sigma_d" : "calibration:hole_prob"},
-                             {SizeText(cand, e.fit),
-                              (sigma ? "sigma_d_px " : "invalid_prob ") + need},
-                             std::sqrt(sigma ? sel.r2_sigma[i] : sel.r2_p[i]), ""});
+      Ambiguity a{{e.name, sigma ? "calibration:sigma_d" : "calibration:hole_prob"},
+                  {SizeText(cand, e.fit), (sigma ? "sigma_d_px " : "invalid_prob ") + need},
+                  std::sqrt(sigma ? sel.r2_sigma[i] : sel.r2_p[i]), "", {}};
+      if (!current.terms.empty()) {  // what the selection reads were this effect the cause
+        const ModelFit with = FitBeside(model, current, e.fit, all);
+        if (with.success) a.selection_with.assign(with.terms.begin(), with.terms.end() - 1);
+      }
+      r.ambiguous.push_back(std::move(a));
     }
     for (const auto& c : sel.confounded) {
       const std::string other = c.a == e.name ? c.b : c.b == e.name ? c.a : "";
@@ -492,7 +496,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           r.ambiguous.push_back({{other, e.name},
                                  {SizeText(sims.surfaces[j].candidate, sel.effects[j].fit),
                                   SizeText(cand, e.fit)},
-                                 c.correlation, ""});
+                                 c.correlation, "", {}});
     }
   }
 

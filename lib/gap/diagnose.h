@@ -247,6 +247,11 @@ struct Ambiguity {
   std::string why;  // "" or what tells they are one of: the outer folds' split between them, or
                     // a rival they choose at least as often as the effect the table selected
                     // (more often, where that effect is dropped for too few folds)
+  // Named with the calibration beside a selection: the selected terms refitted with effects[0]
+  // among them (its calibration components held). What the selection reads if that effect,
+  // not the calibration, is the cause: a temporal drift also moves the median as an offset
+  // of rate·T/2 would, which an offset selected beside σ_d takes in. Empty otherwise.
+  std::vector<TermFit> selection_with;
 };
 
 // The rest of the gap no registered effect earns (open world).

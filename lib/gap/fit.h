@@ -189,6 +189,11 @@ class GapModel {
 ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
                   const std::vector<char>& train, const ModelFit* start = nullptr);
 
+// The terms of `fit` refitted on the marked cells with `beside` added last, each term starting
+// from its own values (the calibration components `beside` duplicates held: Frozen).
+ModelFit FitBeside(const GapModel& model, const ModelFit& fit, const TermFit& beside,
+                   const std::vector<char>& train);
+
 // One candidate alone: every grid node is tried (the calibration solved in closed form, plain
 // squares), and FitTerms refines from the best starts: the lowest local minima of that profile
 // (shared), or each group's best node and the shared fit's values when given (per light or

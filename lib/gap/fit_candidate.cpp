@@ -268,4 +268,13 @@ HeldOut CrossValidate(const GapModel& model, const std::vector<Term>& terms,
   return out;
 }
 
+ModelFit FitBeside(const GapModel& model, const ModelFit& fit, const TermFit& beside,
+                   const std::vector<char>& train) {
+  ModelFit start = fit;
+  start.terms.push_back(beside);
+  std::vector<Term> terms;
+  for (const TermFit& t : start.terms) terms.push_back(t.term);
+  return FitTerms(model, terms, train, &start);
+}
+
 }  // namespace depthbias::gap

@@ -28,6 +28,18 @@ std::string Why(const Ambiguity& a) {
   return "by BIC, " + a.effects[0] + " no longer earns beside " + a.effects.back();
 }
 
+// What the selection reads were the effect named with the calibration the cause
+// (Ambiguity::selection_with): "; were it temporal_drift, the selection would read …", or "".
+std::string WithText(const DiagnoseResult& r, const Ambiguity& a) {
+  std::string s;
+  for (const TermFit& t : a.selection_with) {
+    const Candidate& c = r.candidates[t.term.candidate];
+    s += (s.empty() ? "; were it " + a.effects[0] + ", the selection would read " : ", ") +
+         c.effect + " " + SizeText(c, t);
+  }
+  return s;
+}
+
 std::string Direction(double metres) {
   return metres > 0 ? "reads farther than the simulator: over-reads (the dangerous direction)"
                     : "reads nearer than the simulator: under-reads";
@@ -295,7 +307,7 @@ std::string Headline(const DiagnoseResult& r) {
     o << "}: cannot be told apart here (" << Why(a) << "); would need";
     for (size_t i = 0; i < a.effects.size(); ++i)
       o << (i ? "; " : " ") << a.effects[i] << " " << a.sizes[i];
-    o << "\n";
+    o << WithText(r, a) << "\n";
   }
   for (const Unexplained& u : r.unexplained) {
     if (u.metric == "median_bias_m") continue;
@@ -433,7 +445,7 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
     o << "} (" << Why(a) << "):";
     for (size_t i = 0; i < a.effects.size(); ++i)
       o << (i ? ";" : "") << " " << a.effects[i] << " would need " << a.sizes[i];
-    o << "\n";
+    o << WithText(r, a) << "\n";
   }
   for (const auto& d : r.dropped) o << "- not kept: " << d << "\n";
   o << "\n## Not explained by any registered effect\n\n";

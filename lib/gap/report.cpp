@@ -20,8 +20,6 @@ const Candidate& CandidateOf(const DiagnoseResult& r, const TermFit& t) {
   return r.candidates[t.term.candidate];
 }
 
-std::string ScopeOf(const TermFit& t) { return ScopeName(t.term.scope); }
-
 // "shared", "per light", "per scenario".
 std::string ScopeText(Scope scope) {
   std::string s = ScopeName(scope);
@@ -208,6 +206,9 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
     w.EndArray().BeginArray("sizes");
     for (const auto& s : a.sizes) w.String(s);
     w.EndArray().Number("correlation", a.correlation);
+    if (!a.selection_with.empty()) w.BeginObject("selection_with");  // effects[0] the cause
+    for (const TermFit& t : a.selection_with) ParamsJson(w, CandidateOf(r, t).effect, r, t, false);
+    if (!a.selection_with.empty()) w.EndObject();
     (a.why.empty() ? w : w.String("why", a.why)).EndObject();
   }
   w.EndArray().BeginArray("not_kept");
@@ -315,7 +316,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     const EffectResult& e = r.effects[i];
     const sim::EffectInfo* info = sim::FindEffect(e.name);
     w.BeginObject().String("name", e.name).Integer("rank", static_cast<long long>(i + 1));
-    w.String("scope", ScopeOf(e.fit));
+    w.String("scope", ScopeName(e.fit.term.scope));
     ParamsJson(w, "params", r, e.fit, false);
     ParamsJson(w, "ci95", r, e.fit, true);
     w.Number("delta_bic", e.delta_bic).Number("delta_bic_shared", e.delta_bic_shared);
@@ -334,8 +335,8 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   w.BeginArray("selected");
   for (size_t i = 0; i < r.selected.terms.size(); ++i) {
     const TermFit& t = r.selected.terms[i];
-    w.BeginObject().String("name", CandidateOf(r, t).effect).String("scope", ScopeOf(t));
-    ParamsJson(w, "params", r, t, false);
+    w.BeginObject().String("name", CandidateOf(r, t).effect);
+    ParamsJson(w.String("scope", ScopeName(t.term.scope)), "params", r, t, false);
     ParamsJson(w, "ci95", r, t, true);
     if (i < r.steps.size())
       w.Number("delta_bic", r.steps[i].delta_bic).Number("heldout_gain", r.steps[i].heldout_gain);

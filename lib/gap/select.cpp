@@ -512,7 +512,7 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
       r.ambiguous.push_back({{r.steps[i].effect, r.effects[named].name},
                              {SizeText(sims.surfaces[ci].candidate, current.terms[i]),
                               SizeText(sims.surfaces[named].candidate, r.effects[named].fit)},
-                             NAN, ""});
+                             NAN, "", {}});
       r.dropped.push_back(r.steps[i].effect + " (beside " + r.effects[named].name +
                           ", along the calibration, it no longer earns its parameters: BIC " +
                           Num(named_with) + " with it, " + Num(named_without) + " without)");

@@ -112,7 +112,7 @@ std::vector<Ambiguity> FoldSplits(
     if (with_a == 0 || with_b == 0 || covered < static_cast<int>(folds) ||
         !(pct[0] >= own_need[0] || pct[1] >= own_need[1]))
       continue;
-    Ambiguity split{{c.a, c.b}, {}, c.correlation, ""};
+    Ambiguity split{{c.a, c.b}, {}, c.correlation, "", {}};
     split.sizes = sizes(split.effects);
     if (split.sizes.size() != 2) continue;
     split.why = "the outer folds split between them: " + c.a + " in " + std::to_string(with_a) +

@@ -298,6 +298,42 @@ TEST(Criteria, AnEffectAliasedWithTheCalibrationIsAnsweredByNamingIt) {
       << "an effect selected beside it";
 }
 
+// An offset selected beside a drift named "one of" with the calibration: the drift also moves
+// the median, so the offset is read as the tool reads it were the drift the cause
+// (selection_with). Its value alone is what it takes in of the drift; without the branch, or
+// with a branch that misses, the size fails.
+TEST(Criteria, ASelectionBesideAnEffectAliasedWithTheCalibrationIsReadWithIt) {
+  WithheldCase pair;
+  pair.name = "offset + drift";
+  pair.injected = {{"disparity_offset", {{"delta_px", 0.15}}, ""},
+                   {"temporal_drift", {{"rate_px_per_s", 0.6}}, ""}};
+  const std::string calibration =
+      ",\n  \"calibration\": {\"scenarios\": [{\"scenario\": \"daylight/HA\"}, "
+      "{\"scenario\": \"sunset/HA\"}]}";
+  auto json = [&](const std::string& with) {
+    std::string j = Json("{\"name\": \"disparity_offset\", \"scope\": \"shared\", "
+                         "\"params\": {\"delta_px\": 0.22}}",
+                         "\"shrink_simulated_pct\": 90");
+    j.insert(j.rfind('}'), calibration +
+                               ",\n  \"ambiguous\": [{\"one_of\": [\"temporal_drift\", "
+                               "\"calibration:sigma_d\"], \"sizes\": [\"rate_px_per_s 0.61\", "
+                               "\"sigma_d_px 0.09 / 0.05\"], \"correlation\": 0.97" +
+                               with + "}]");
+    return j;
+  };
+  const CaseOutcome alone = JudgeCase(json(""), pair, Rows());
+  EXPECT_FALSE(alone.pass) << "0.22 px: the drift's median shift taken in";
+  EXPECT_NE(alone.why.find("size"), std::string::npos) << alone.why;
+  const CaseOutcome with = JudgeCase(
+      json(", \"selection_with\": {\"disparity_offset\": {\"delta_px\": 0.16}}"), pair, Rows());
+  EXPECT_TRUE(with.pass) << with.why;
+  EXPECT_FALSE(
+      JudgeCase(json(", \"selection_with\": {\"disparity_offset\": {\"delta_px\": 0.2}}"), pair,
+                Rows())
+          .pass)
+      << "33 % off with the drift too";
+}
+
 TEST(Criteria, OutsideTheRegistryUnexplainedMustNameTheRightCells) {
   WithheldCase c;
   c.name = "step";
