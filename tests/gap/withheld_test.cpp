@@ -674,6 +674,36 @@ TEST(Cases, AnOffsetADriftExplainsIsNamedWithIt) {
   EXPECT_EQ(folds.find("\"disparity_offset\""), std::string::npos) << folds;
 }
 
+// The number after the last of `anchors`, each found after the one before, in a gap.json (NaN
+// if one is missing).
+double NumberAfter(const std::string& json, std::initializer_list<const char*> anchors) {
+  size_t at = 0;
+  for (const char* a : anchors) {
+    at = json.find(a, at);
+    if (at == std::string::npos) return NAN;
+    at += std::string(a).size();
+  }
+  return std::strtod(json.c_str() + at, nullptr);
+}
+
+// An offset of 0.15 px beside a drift of 0.6 px/s (seed 1): the offset is kept at 0.223 px, the
+// drift named "one of" with the calibration's σ_d, which moves no median, so the offset takes in
+// the drift's mean disparity over the recording. The entry naming the drift also gives the
+// offset refitted with the drift beside it (selection_with): that part is given back.
+TEST(Cases, AnOffsetBesideADriftNamedWithTheCalibrationIsAlsoReadWithIt) {
+  const std::vector<CaseOutcome> out = OneCase("disparity_offset + temporal_drift", 1);
+  ASSERT_EQ(out.size(), 1u);
+  ASSERT_EQ(out[0].selected, std::vector<std::string>{"disparity_offset"}) << out[0].why;
+  const std::string& j = out[0].gap_json;
+  const double alone = NumberAfter(j, {"\"selected\": [", "\"delta_px\": "});
+  const double with =
+      NumberAfter(j, {"\"ambiguous\": [", "\"temporal_drift\",", "\"calibration:sigma_d\"",
+                      "\"selection_with\": {", "\"disparity_offset\": {", "\"delta_px\": "});
+  EXPECT_GT(alone, 0.2);
+  EXPECT_LT(with, alone - 0.01) << "the drift's median shift stays in the offset";
+  EXPECT_GT(with, 0.1);
+}
+
 // A table read as diagnose_gap reads it (its rows screened by the sensor's design rules) and
 // diagnosed with the defaults on 2 threads.
 DiagnoseResult DiagnoseCsv(const std::string& csv, size_t expected_rows,
