@@ -24,6 +24,7 @@ Usage: .venv/bin/python scripts/gap_bounds.py [--protocol config/protocol_paper.
 
 import argparse
 import math
+import sys
 
 import numpy as np
 import yaml
@@ -44,16 +45,33 @@ def main():
     ap.add_argument("--recordings", type=int, default=4,
                     help="recordings sharing a test point's placement (presets × emitter)")
     args = ap.parse_args()
-    with open(args.protocol) as f:
-        proto = yaml.safe_load(f)
-    with open(args.sensor) as f:
-        sensor = yaml.safe_load(f)
-    p = proto.get("protocol", proto)
-    distances = [float(d) for d in p["distances_m"]]
-    angles = [float(a) for a in p["angles_deg"]]
-    lights = list(p.get("lights", ["daylight", "sunset"]))
-    s = sensor.get("sensor", sensor)
-    fb = float(s["fx"]) * float(s["baseline_m"])
+    if not (args.placement_pct > 0) or not (args.median_noise_at_10m >= 0) or args.recordings < 1:
+        sys.exit("gap_bounds: --placement-pct must be > 0, --median-noise-at-10m >= 0 and "
+                 "--recordings >= 1")
+
+    def read(path, what):
+        try:
+            with open(path) as f:
+                doc = yaml.safe_load(f)
+        except (OSError, yaml.YAMLError) as e:
+            sys.exit(f"gap_bounds: {path}: cannot read it as YAML ({e.__class__.__name__})")
+        out = doc.get(what, doc) if isinstance(doc, dict) else doc
+        if not isinstance(out, dict):
+            sys.exit(f"gap_bounds: {path}: no '{what}' mapping")
+        return out
+
+    p = read(args.protocol, "protocol")
+    s = read(args.sensor, "sensor")
+    try:
+        distances = [float(d) for d in p["distances_m"]]
+        angles = [float(a) for a in p["angles_deg"]]
+        lights = [str(x) for x in p.get("lights", ["daylight", "sunset"])]
+        fb = float(s["fx"]) * float(s["baseline_m"])
+    except (KeyError, TypeError, ValueError) as e:
+        sys.exit(f"gap_bounds: {args.protocol}, {args.sensor}: a key missing or not a number "
+                 f"({e})")
+    if not distances or not angles or not lights or not (fb > 0) or min(distances) <= 0:
+        sys.exit(f"gap_bounds: {args.protocol}: no distances, angles or lights, or f·B <= 0")
     # The panel centre's depth: a range protocol's distance is along the line of sight.
     along_sight = p.get("distance_is", "range") == "range"
     points = [(light, d * (math.cos(math.radians(a)) if along_sight else 1), a)
@@ -103,6 +121,8 @@ def main():
     ]
     rng = np.random.default_rng(1)
     for name, laws, light in cases:
+        if light and light not in lights:
+            continue
         cov = np.linalg.inv(info(laws, light))
         se = np.sqrt(np.diag(cov))
         truth = np.array([v for _, v in laws])
