@@ -381,8 +381,8 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   // probability, where each scenario's σ_d and p are calibrated) is never selected: it is
   // answered when gap.json names it "one of" with the calibration, with the size it would need
   // (per scenario, in the calibration's scenario order, or one shared value). Beside a selection,
-  // the selected sizes are then those read with it the cause (selection_with), where there is
-  // one such effect: a drift's median shift is the offset's to give back.
+  // it and the selected effects are read in the one fit that holds them all (selection_with),
+  // where there is one such effect: a drift's median shift is the offset's to give back.
   std::map<std::string, std::vector<double>> aliased;
   std::map<std::string, const Json*> branch;
   if (const Json* amb = root.Find("ambiguous"))
@@ -407,9 +407,12 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
         if (const Json* with = a.Find("selection_with")) branch[name] = with;
       }
     }
+  std::set<std::string> on_branch;  // aliased effects read in the branch's fit
   if (aliased.size() == 1 && branch.size() == 1)
     for (const auto& [effect, params] : branch.begin()->second->members)
-      if (fitted.count(effect)) fitted[effect] = &params;
+      if (fitted.count(effect) || aliased.count(effect)) fitted[effect] = &params;
+  if (aliased.size() == 1 && branch.size() == 1 && fitted.count(branch.begin()->first))
+    on_branch.insert(branch.begin()->first);
   std::set<std::string> answered = got;
   for (const auto& [name, v] : aliased) answered.insert(name);
   if (answered != want) fail("selected set differs from the injected set");
@@ -424,7 +427,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     for (const Candidate& c : all)
       if (c.effect == in.effect) cand = &c;
     const auto al = aliased.find(in.effect);
-    if (cand && al != aliased.end() && cand->axes.size() == 1) {
+    if (cand && al != aliased.end() && cand->axes.size() == 1 && !on_branch.count(in.effect)) {
       // Named "one of" with the calibration: the size it would need, scenario by scenario.
       std::vector<std::string> order;
       if (const Json* cal = root.Find("calibration"))
@@ -507,6 +510,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     }
     std::string prefix = grouped ? scope_text + ": " : "";
     std::replace(prefix.begin(), prefix.end(), '_', ' ');
+    if (on_branch.count(in.effect)) prefix = "one of {" + in.effect + ", calibration}, beside: ";
     o.recovered[in.effect] = prefix + shown;
   }
   if (!truth.injected.empty() && !(o.max_rel_error <= 0.2))

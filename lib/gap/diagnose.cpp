@@ -484,7 +484,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                   std::sqrt(sigma ? sel.r2_sigma[i] : sel.r2_p[i]), "", {}};
       if (!current.terms.empty()) {  // what the selection reads were this effect the cause
         const ModelFit with = FitBeside(model, current, e.fit, all);
-        if (with.success) a.selection_with.assign(with.terms.begin(), with.terms.end() - 1);
+        if (with.success) a.selection_with = with.terms;  // the named effect last
       }
       r.ambiguous.push_back(std::move(a));
     }

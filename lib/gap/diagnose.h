@@ -248,9 +248,10 @@ struct Ambiguity {
                     // a rival they choose at least as often as the effect the table selected
                     // (more often, where that effect is dropped for too few folds)
   // Named with the calibration beside a selection: the selected terms refitted with effects[0]
-  // among them (its calibration components held). What the selection reads if that effect,
-  // not the calibration, is the cause: a temporal drift also moves the median as an offset
-  // of rate·T/2 would, which an offset selected beside σ_d takes in. Empty otherwise.
+  // among them, last (its calibration components held). What the selection and the effect read
+  // together if that effect, not the calibration, is the cause: a temporal drift also moves the
+  // median as an offset of rate·T/2 would, which an offset selected beside σ_d takes in. Empty
+  // otherwise.
   std::vector<TermFit> selection_with;
 };
 

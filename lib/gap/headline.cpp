@@ -28,14 +28,15 @@ std::string Why(const Ambiguity& a) {
   return "by BIC, " + a.effects[0] + " no longer earns beside " + a.effects.back();
 }
 
-// What the selection reads were the effect named with the calibration the cause
-// (Ambiguity::selection_with): "; were it temporal_drift, the selection would read …", or "".
+// What the selection and the effect named with the calibration read together were that effect
+// the cause (Ambiguity::selection_with): "; were it temporal_drift, the selection beside it
+// would read disparity_offset …, temporal_drift …", or "".
 std::string WithText(const DiagnoseResult& r, const Ambiguity& a) {
   std::string s;
   for (const TermFit& t : a.selection_with) {
     const Candidate& c = r.candidates[t.term.candidate];
-    s += (s.empty() ? "; were it " + a.effects[0] + ", the selection would read " : ", ") +
-         c.effect + " " + SizeText(c, t);
+    s += s.empty() ? "; were it " + a.effects[0] + ", the selection beside it would read " : ", ";
+    s += c.effect + " " + SizeText(c, t);
   }
   return s;
 }

@@ -299,9 +299,9 @@ TEST(Criteria, AnEffectAliasedWithTheCalibrationIsAnsweredByNamingIt) {
 }
 
 // An offset selected beside a drift named "one of" with the calibration: the drift also moves
-// the median, so the offset is read as the tool reads it were the drift the cause
-// (selection_with). Its value alone is what it takes in of the drift; without the branch, or
-// with a branch that misses, the size fails.
+// the median, so the offset and the drift are read in the one fit that holds them both
+// (selection_with). The offset's value alone is what it takes in of the drift; without the
+// branch, with a branch whose offset misses, or whose drift misses, the sizes fail.
 TEST(Criteria, ASelectionBesideAnEffectAliasedWithTheCalibrationIsReadWithIt) {
   WithheldCase pair;
   pair.name = "offset + drift";
@@ -321,17 +321,24 @@ TEST(Criteria, ASelectionBesideAnEffectAliasedWithTheCalibrationIsReadWithIt) {
                                with + "}]");
     return j;
   };
+  auto branch = [](double offset, const std::string& drift) {
+    return ", \"selection_with\": {\"disparity_offset\": {\"delta_px\": " + std::to_string(offset) +
+           "}, \"temporal_drift\": " + drift + "}";
+  };
   const CaseOutcome alone = JudgeCase(json(""), pair, Rows());
   EXPECT_FALSE(alone.pass) << "0.22 px: the drift's median shift taken in";
   EXPECT_NE(alone.why.find("size"), std::string::npos) << alone.why;
-  const CaseOutcome with = JudgeCase(
-      json(", \"selection_with\": {\"disparity_offset\": {\"delta_px\": 0.16}}"), pair, Rows());
+  const CaseOutcome with = JudgeCase(json(branch(0.16, "{\"rate_px_per_s\": 0.63}")), pair, Rows());
   EXPECT_TRUE(with.pass) << with.why;
-  EXPECT_FALSE(
-      JudgeCase(json(", \"selection_with\": {\"disparity_offset\": {\"delta_px\": 0.2}}"), pair,
-                Rows())
-          .pass)
+  EXPECT_NE(with.recovered.at("temporal_drift").find("rate_px_per_s 0.63"), std::string::npos)
+      << with.recovered.at("temporal_drift");
+  const std::string per_scenario =
+      "{\"daylight/HA\": {\"rate_px_per_s\": 0.62}, \"sunset/HA\": {\"rate_px_per_s\": 0.58}}";
+  EXPECT_TRUE(JudgeCase(json(branch(0.16, per_scenario)), pair, Rows()).pass);
+  EXPECT_FALSE(JudgeCase(json(branch(0.2, "{\"rate_px_per_s\": 0.63}")), pair, Rows()).pass)
       << "33 % off with the drift too";
+  EXPECT_FALSE(JudgeCase(json(branch(0.16, "{\"rate_px_per_s\": 0.9}")), pair, Rows()).pass)
+      << "the drift read beside the offset 50 % off, though alone it reads 0.61";
 }
 
 TEST(Criteria, OutsideTheRegistryUnexplainedMustNameTheRightCells) {
