@@ -384,7 +384,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   // it and the selected effects are read in the one fit that holds them all (selection_with),
   // where there is one such effect: a drift's median shift is the offset's to give back.
   std::map<std::string, std::vector<double>> aliased;
-  std::map<std::string, const Json*> branch;
+  const Json* branch = nullptr;  // the aliased effect's selection_with
   if (const Json* amb = root.Find("ambiguous"))
     for (const Json& a : amb->items) {
       const Json* one = a.Find("one_of");
@@ -404,15 +404,15 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
           if (end != w.c_str() && *end == '\0') v.push_back(x);
         }
         aliased[name] = v;
-        if (const Json* with = a.Find("selection_with")) branch[name] = with;
+        if (const Json* with = a.Find("selection_with")) branch = with;
       }
     }
-  std::set<std::string> on_branch;  // aliased effects read in the branch's fit
-  if (aliased.size() == 1 && branch.size() == 1)
-    for (const auto& [effect, params] : branch.begin()->second->members)
+  std::string on_branch;  // the aliased effect, read in the branch's fit; or ""
+  if (aliased.size() == 1 && branch) {
+    for (const auto& [effect, params] : branch->members)
       if (fitted.count(effect) || aliased.count(effect)) fitted[effect] = &params;
-  if (aliased.size() == 1 && branch.size() == 1 && fitted.count(branch.begin()->first))
-    on_branch.insert(branch.begin()->first);
+    if (fitted.count(aliased.begin()->first)) on_branch = aliased.begin()->first;
+  }
   std::set<std::string> answered = got;
   for (const auto& [name, v] : aliased) answered.insert(name);
   if (answered != want) fail("selected set differs from the injected set");
@@ -427,7 +427,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     for (const Candidate& c : all)
       if (c.effect == in.effect) cand = &c;
     const auto al = aliased.find(in.effect);
-    if (cand && al != aliased.end() && cand->axes.size() == 1 && !on_branch.count(in.effect)) {
+    if (cand && al != aliased.end() && cand->axes.size() == 1 && in.effect != on_branch) {
       // Named "one of" with the calibration: the size it would need, scenario by scenario.
       std::vector<std::string> order;
       if (const Json* cal = root.Find("calibration"))
@@ -510,7 +510,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     }
     std::string prefix = grouped ? scope_text + ": " : "";
     std::replace(prefix.begin(), prefix.end(), '_', ' ');
-    if (on_branch.count(in.effect)) prefix = "one of {" + in.effect + ", calibration}, beside: ";
+    if (in.effect == on_branch) prefix = "one of {" + in.effect + ", calibration}, beside: ";
     o.recovered[in.effect] = prefix + shown;
   }
   if (!truth.injected.empty() && !(o.max_rel_error <= 0.2))
