@@ -553,7 +553,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                                                                 r.calibration_in.n[k]
                                                           : 0.0);
     }
-    r.limits = FindDetectionLimits(at_phi, all, ls);
+    r.limits = FindDetectionLimits(at_phi, all, ls, &current);
   }
   r.z_selected = Scaled(model, model.Predict(current));
   r.z_selected_heldout = Scaled(model, current_ho.mu);

@@ -44,7 +44,7 @@ struct Whitened {
 }  // namespace
 
 DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<char>& cells,
-                                    const LimitSettings& settings) {
+                                    const LimitSettings& settings, const ModelFit* selection) {
   DetectionLimits out;
   out.settings = settings;
   const Design& d = model.design();
@@ -76,6 +76,46 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
     wh.n.resize(n_obs, 2 * scenarios);
     for (int j = 0; j < 2 * scenarios; ++j) wh.n.col(j) = wh.Apply(raw.col(j));
   }
+  // The selected terms' whitened directions: for each term, group and continuous axis, the
+  // departure's central difference in the axis's coordinate at the fitted values (one-sided at
+  // the grid's ends), on the group's observations. by_term[j]: the column's term.
+  Eigen::MatrixXd selected_n;
+  std::vector<int> by_term;
+  if (selection) {
+    std::vector<Eigen::VectorXd> columns;
+    for (const TermFit& t : selection->terms) {
+      const int c = t.term.candidate;
+      const int axes = static_cast<int>(model.surface(c).candidate.axes.size());
+      for (int g = 0; g < model.NumGroups(t.term) && g < static_cast<int>(t.values.size()); ++g)
+        for (int a = 0; a < axes && a < 2; ++a) {
+          if (t.term.Discrete(g, a) >= 0) continue;
+          const std::vector<double>& nodes = model.NodeCoords(c, a);
+          if (nodes.size() < 2) continue;
+          double u[2] = {0, 0};
+          for (int b = 0; b < axes && b < 2; ++b) u[b] = model.ToCoord(c, b, t.values[g][b]);
+          const double h = 1e-3 * (nodes.back() - nodes.front());
+          const double lo = std::max(nodes.front(), u[a] - h);
+          const double hi = std::min(nodes.back(), u[a] + h);
+          if (!(hi > lo)) continue;
+          Eigen::VectorXd raw = Eigen::VectorXd::Zero(n_obs);
+          for (int i = 0; i < n_obs; ++i) {
+            const size_t o = wh.w.obs[i];
+            if (model.Group(t.term, static_cast<int>(o / k_count)) != g) continue;
+            double v[2] = {u[0], u[1]};
+            v[a] = hi;
+            const double up = model.Delta(t.term, v, o);
+            v[a] = lo;
+            raw[i] = (up - model.Delta(t.term, v, o)) / (hi - lo);
+          }
+          if (!(raw.squaredNorm() > 0)) continue;
+          columns.push_back(wh.Apply(raw));
+          by_term.push_back(c);
+        }
+    }
+    selected_n.resize(n_obs, static_cast<int>(columns.size()));
+    for (size_t j = 0; j < columns.size(); ++j) selected_n.col(static_cast<int>(j)) = columns[j];
+  }
+
   // The median bias's index among the compared metrics, and the far cells' observations.
   int km = -1;
   for (int k = 0; k < k_count; ++k)
@@ -126,10 +166,19 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
         cols.push_back(2 * s + comp);
         prec.push_back(1 / std::pow(comp == 0 ? fs.tau_log_sigma : fs.tau_logit_p, 2));
       }
-    Eigen::MatrixXd n(n_obs, static_cast<int>(cols.size()));
+    // And the selected terms' but this effect's own, free (a trace of ridge keeps a direction
+    // two groups share solvable).
+    std::vector<int> beside;
+    for (size_t j = 0; j < by_term.size(); ++j)
+      if (by_term[j] != cand_index) beside.push_back(static_cast<int>(j));
+    const int n_cols = static_cast<int>(cols.size() + beside.size());
+    Eigen::MatrixXd n(n_obs, n_cols);
     for (size_t j = 0; j < cols.size(); ++j) n.col(j) = wh.n.col(cols[j]);
+    for (size_t j = 0; j < beside.size(); ++j)
+      n.col(static_cast<int>(cols.size() + j)) = selected_n.col(beside[j]);
     Eigen::MatrixXd a = n.transpose() * n;
     for (size_t j = 0; j < cols.size(); ++j) a(j, j) += prec[j];
+    for (size_t j = cols.size(); j < static_cast<size_t>(n_cols); ++j) a(j, j) *= 1 + 1e-9;
     const Eigen::LDLT<Eigen::MatrixXd> solve(a);
 
     // Both bars' scores at a coordinate of the axis (each ≥ 0 where it passes), and the far
@@ -155,7 +204,7 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
       }
       const Eigen::VectorXd z = wh.Apply(delta);
       double lambda = z.squaredNorm();
-      if (!cols.empty()) {
+      if (n_cols > 0) {
         const Eigen::VectorXd b = n.transpose() * z;
         lambda -= b.dot(solve.solve(b));
       }

@@ -13,7 +13,11 @@
 //     duplicates left out, held at their configured values as a fit holding the effect holds
 //     them) and Λ their prior precisions (fit.h (3)): the calibration takes what it can. The
 //     test asks ΔBIC > 0, a drop beyond ln n for one parameter, so θ is found with chance P
-//     where √λ(θ) ≥ √(ln n) + Φ⁻¹(P).
+//     where √λ(θ) ≥ √(ln n) + Φ⁻¹(P). Where the table already holds a selection, the effect
+//     is fitted beside it, whose terms move too: N also holds the whitened directions of every
+//     selected term but the effect's own (each group's continuous axes, at its fitted values,
+//     without a prior). An effect the selection can stand for is then seen only as far as it
+//     departs from what the selection can take (a depth scale beside a kept offset).
 //  2. The share of the gap an effect must remove to be kept, read as the keep rule reads it
 //     (DiagnoseParams: min_effect_shrink_pct and min_own_shrink_pct, p, or in the metrics moved
 //     min_moved_shrink_pct and min_own_moved_shrink_pct, q). Its gain in the gap's own units
@@ -88,9 +92,11 @@ struct DetectionLimits {
   std::vector<DetectionLimit> effects;  // one per candidate, in the candidates' order
 };
 
-// Over the valid observations of the marked cells, at the model's dispersion and placement.
+// Over the valid observations of the marked cells, at the model's dispersion and placement;
+// beside `selection`'s terms when given (null or empty: beside the calibration alone).
 DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<char>& cells,
-                                    const LimitSettings& settings = {});
+                                    const LimitSettings& settings = {},
+                                    const ModelFit* selection = nullptr);
 
 // gap.json's "detection_limits" object.
 void LimitsJson(records::JsonWriter& w, const DetectionLimits& l);

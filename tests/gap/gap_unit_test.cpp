@@ -1478,6 +1478,79 @@ TEST(Limits, AtTheLimitTheFitGainsTheNoncentralityAskedAndTheGainTheShareAsks) {
   EXPECT_LT(FindDetectionLimits(frozen, all).effects[0].size[1], e.size[1]);
 }
 
+// Beside a selection, a limit is what the effect adds past what the selected terms can take:
+// on the placed grid (seed 23, not the other tests' draws) with a disparity offset kept, a depth
+// scale (∝ D, the offset ∝ D²) is seen from a larger size than alone. Checked against the fit
+// itself: on a noise-free table reading the base, the kept offset and the scale at that limit,
+// the fit of both gains (√(ln n) + Φ⁻¹(0.8))² over the offset's alone within 3 %, and reads the
+// scale there. The effect's own term in the selection is not set beside it: the offset's limit
+// with the offset selected is its limit alone.
+TEST(Limits, BesideASelectionTheLimitIsWhatTheSelectionCannotTake) {
+  Candidate scale;
+  for (const Candidate& c : DefaultCandidates())
+    if (c.effect == "depth_scale") scale = c;
+  ASSERT_EQ(scale.effect, "depth_scale");
+  scale.range_law = false;
+  auto scale_law = [](double s, double dist) { return s * dist; };
+  LimitTable t = MakeLimitTable(23);
+  {  // the scale's surface beside the offset's
+    const LimitTable st = MedianTable(
+        PlacedGrid(23, nullptr), scale,
+        [&](const std::vector<double>& v, double dist) { return scale_law(v[0], dist); });
+    ASSERT_EQ(st.s.surfaces.size(), 1u);
+    t.s.surfaces.push_back(st.s.surfaces[0]);
+  }
+  FitSettings fs;
+  fs.huber_k = 0;
+  const std::vector<char> all(t.d.num_cells(), 1);
+  const GapModel model(t.d, t.s, t.n, fs, &t.pe);
+  const double kept_offset = -0.2;
+  ModelFit selection = FitTerms(model, {Term{0, Scope::kShared, {{-1}}}}, all);
+  ASSERT_TRUE(selection.success) << selection.message;
+  selection.terms[0].values[0][0] = kept_offset;
+  const DetectionLimits alone = FindDetectionLimits(model, all);
+  const DetectionLimits beside = FindDetectionLimits(model, all, {}, &selection);
+  ASSERT_EQ(alone.effects.size(), 2u);
+  ASSERT_EQ(beside.effects.size(), 2u);
+  const double s_alone = alone.effects[1].size[1], s_beside = beside.effects[1].size[1];
+  ASSERT_TRUE(std::isfinite(s_alone) && std::isfinite(s_beside));
+  std::printf("depth_scale limit alone %+.4f, beside an offset %+.4f\n", s_alone, s_beside);
+  EXPECT_GT(s_beside, 1.5 * s_alone) << "D and D² alike over 4 to 16 m";
+  EXPECT_EQ(beside.effects[0].size[1], alone.effects[0].size[1]);
+
+  Design at = t.d;  // the base, the kept offset and the scale at its limit beside it
+  const int kk = at.num_metrics();
+  for (int c = 0; c < at.num_cells(); ++c) {
+    const double dist = at.cells[c].distance_m;
+    at.real[static_cast<size_t>(c) * kk] =
+        t.s.base[static_cast<size_t>(c) * kk] + OffsetLaw(kept_offset, dist) +
+        scale_law(s_beside, dist);
+  }
+  const GapModel exact(at, t.s, t.n, fs, &t.pe);
+  const ModelFit offset_only = FitTerms(exact, {Term{0, Scope::kShared, {{-1}}}}, all);
+  const ModelFit both =
+      FitTerms(exact, {Term{0, Scope::kShared, {{-1}}}, Term{1, Scope::kShared, {{-1}}}}, all);
+  ASSERT_TRUE(offset_only.success && both.success);
+  const double drop = offset_only.Deviance() - both.Deviance();
+  EXPECT_NEAR(drop, beside.z_needed * beside.z_needed, 0.03 * beside.z_needed * beside.z_needed);
+  EXPECT_NEAR(both.terms[1].values[0][0], s_beside, 0.03 * s_beside);
+  EXPECT_NEAR(both.terms[0].values[0][0], kept_offset, 0.03 * std::fabs(kept_offset));
+  // Alone, the limit would promise a scale the fit beside the offset barely sees.
+  Design at_alone = t.d;
+  for (int c = 0; c < at_alone.num_cells(); ++c) {
+    const double dist = at_alone.cells[c].distance_m;
+    at_alone.real[static_cast<size_t>(c) * kk] =
+        t.s.base[static_cast<size_t>(c) * kk] + OffsetLaw(kept_offset, dist) +
+        scale_law(s_alone, dist);
+  }
+  const GapModel exact_alone(at_alone, t.s, t.n, fs, &t.pe);
+  const ModelFit o1 = FitTerms(exact_alone, {Term{0, Scope::kShared, {{-1}}}}, all);
+  const ModelFit b1 = FitTerms(
+      exact_alone, {Term{0, Scope::kShared, {{-1}}}, Term{1, Scope::kShared, {{-1}}}}, all);
+  ASSERT_TRUE(o1.success && b1.success);
+  EXPECT_LT(o1.Deviance() - b1.Deviance(), 0.5 * beside.z_needed * beside.z_needed);
+}
+
 TEST(ChiSquare, SurvivalMatchesKnownQuantiles) {
   EXPECT_NEAR(ChiSquareSurvival(3.841459, 1), 0.05, 1e-6);
   EXPECT_NEAR(ChiSquareSurvival(9.487729, 4), 0.05, 1e-6);
