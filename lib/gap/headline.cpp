@@ -136,7 +136,8 @@ std::string LimitsMarkdown(const DiagnoseResult& r) {
     << Pct(100 * l.settings.power) << " chance: its noncentrality √λ reaches √(ln n) + Φ⁻¹("
     << Num(l.settings.power) << ") = " << Num(l.z_needed) << " over " << l.observations
     << " observations (this table's noise, placement scatter and dispersion; the calibration "
-       "takes what it can). And once it is there it removes, on average over the outer folds, "
+       "and the selected effects take what they can). And once it is there it removes, on "
+       "average over the outer folds, "
     << Pct(100 * l.settings.min_own_share) << " of each fold's calibrated gap on its held-out "
        "cells"
     << (l.settings.pooled ? ", and " + Pct(100 * l.settings.min_share) + " of their sum" : "")
