@@ -79,20 +79,30 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
   // The selected terms' whitened directions: for each term, group and continuous axis, the
   // departure's central difference in the axis's coordinate at the fitted values (one-sided at
   // the grid's ends), on the group's observations. by_term[j]: the column's term.
+  // A group the selection did not fit (no cells) and a discrete axis (FitTerms holds it) give
+  // none. selection_frozen: the calibration components the selection holds (GapModel::Frozen).
   Eigen::MatrixXd selected_n;
   std::vector<int> by_term;
+  int selection_frozen = 0;
   if (selection) {
     std::vector<Eigen::VectorXd> columns;
+    std::vector<Term> held;
     for (const TermFit& t : selection->terms) {
+      held.push_back(t.term);
       const int c = t.term.candidate;
-      const int axes = static_cast<int>(model.surface(c).candidate.axes.size());
+      const std::vector<Axis>& cand_axes = model.surface(c).candidate.axes;
+      const int axes = static_cast<int>(cand_axes.size());
       for (int g = 0; g < model.NumGroups(t.term) && g < static_cast<int>(t.values.size()); ++g)
         for (int a = 0; a < axes && a < 2; ++a) {
-          if (t.term.Discrete(g, a) >= 0) continue;
+          if (cand_axes[a].discrete || t.term.Discrete(g, a) >= 0 ||
+              static_cast<int>(t.values[g].size()) < axes ||
+              (g < static_cast<int>(t.group_used.size()) && !t.group_used[g]))
+            continue;
           const std::vector<double>& nodes = model.NodeCoords(c, a);
           if (nodes.size() < 2) continue;
           double u[2] = {0, 0};
           for (int b = 0; b < axes && b < 2; ++b) u[b] = model.ToCoord(c, b, t.values[g][b]);
+          if (!std::isfinite(u[a])) continue;
           const double h = 1e-3 * (nodes.back() - nodes.front());
           const double lo = std::max(nodes.front(), u[a] - h);
           const double hi = std::min(nodes.back(), u[a] + h);
@@ -114,6 +124,7 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
     }
     selected_n.resize(n_obs, static_cast<int>(columns.size()));
     for (size_t j = 0; j < columns.size(); ++j) selected_n.col(static_cast<int>(j)) = columns[j];
+    selection_frozen = model.Frozen(held);
   }
 
   // The median bias's index among the compared metrics, and the far cells' observations.
@@ -157,12 +168,13 @@ DetectionLimits FindDetectionLimits(const GapModel& model, const std::vector<cha
       lim.other_value = h.nodes[node];
     }
 
-    // The calibration directions a fit holding this effect moves, and their priors.
+    // The calibration directions a fit holding this effect (and the selection) moves, and
+    // their priors.
     std::vector<int> cols;
     std::vector<double> prec;
     for (int s = 0; s < scenarios; ++s)
       for (int comp = 0; comp < 2; ++comp) {
-        if (lim.frozen & (1 << comp)) continue;
+        if ((lim.frozen | selection_frozen) & (1 << comp)) continue;
         cols.push_back(2 * s + comp);
         prec.push_back(1 / std::pow(comp == 0 ? fs.tau_log_sigma : fs.tau_logit_p, 2));
       }

@@ -1483,72 +1483,105 @@ TEST(Limits, AtTheLimitTheFitGainsTheNoncentralityAskedAndTheGainTheShareAsks) {
 // scale (∝ D, the offset ∝ D²) is seen from a larger size than alone. Checked against the fit
 // itself: on a noise-free table reading the base, the kept offset and the scale at that limit,
 // the fit of both gains (√(ln n) + Φ⁻¹(0.8))² over the offset's alone within 3 %, and reads the
-// scale there. The effect's own term in the selection is not set beside it: the offset's limit
-// with the offset selected is its limit alone.
+// scale there; at the limit read alone it gains less than half of that. The same with the
+// offset kept per light, each light's direction on its own cells. The effect's own term in the selection is not set beside it: its limit is
+// its limit alone. And a kept law whose direction depends on its value, −(v + v²)·D²/60.8 −
+// 0.1·v²·D, is read where it was fitted: its limit beside v = −0.2 is not the one beside v = 0.
 TEST(Limits, BesideASelectionTheLimitIsWhatTheSelectionCannotTake) {
-  Candidate scale;
+  Candidate offset = DefaultCandidates()[0], scale;
   for (const Candidate& c : DefaultCandidates())
     if (c.effect == "depth_scale") scale = c;
   ASSERT_EQ(scale.effect, "depth_scale");
-  scale.range_law = false;
+  offset.range_law = scale.range_law = false;
   auto scale_law = [](double s, double dist) { return s * dist; };
-  LimitTable t = MakeLimitTable(23);
-  {  // the scale's surface beside the offset's
-    const LimitTable st = MedianTable(
-        PlacedGrid(23, nullptr), scale,
-        [&](const std::vector<double>& v, double dist) { return scale_law(v[0], dist); });
-    ASSERT_EQ(st.s.surfaces.size(), 1u);
-    t.s.surfaces.push_back(st.s.surfaces[0]);
-  }
+  const std::vector<records::PanelMetrics> rows = PlacedGrid(23, nullptr);
+  // The grid against the kept law's surface and the scale's.
+  auto make = [&](const std::function<double(double, double)>& kept_law) {
+    LimitTable t = MedianTable(rows, offset, [&](const std::vector<double>& v, double dist) {
+      return kept_law(v[0], dist);
+    });
+    t.s.surfaces.push_back(MedianTable(rows, scale, [&](const std::vector<double>& v,
+                                                        double dist) {
+                             return scale_law(v[0], dist);
+                           }).s.surfaces.at(0));
+    return t;
+  };
   FitSettings fs;
   fs.huber_k = 0;
+  const LimitTable t = make(OffsetLaw);
   const std::vector<char> all(t.d.num_cells(), 1);
   const GapModel model(t.d, t.s, t.n, fs, &t.pe);
-  const double kept_offset = -0.2;
-  ModelFit selection = FitTerms(model, {Term{0, Scope::kShared, {{-1}}}}, all);
-  ASSERT_TRUE(selection.success) << selection.message;
-  selection.terms[0].values[0][0] = kept_offset;
   const DetectionLimits alone = FindDetectionLimits(model, all);
-  const DetectionLimits beside = FindDetectionLimits(model, all, {}, &selection);
   ASSERT_EQ(alone.effects.size(), 2u);
-  ASSERT_EQ(beside.effects.size(), 2u);
-  const double s_alone = alone.effects[1].size[1], s_beside = beside.effects[1].size[1];
-  ASSERT_TRUE(std::isfinite(s_alone) && std::isfinite(s_beside));
-  std::printf("depth_scale limit alone %+.4f, beside an offset %+.4f\n", s_alone, s_beside);
-  EXPECT_GT(s_beside, 1.5 * s_alone) << "D and D² alike over 4 to 16 m";
-  EXPECT_EQ(beside.effects[0].size[1], alone.effects[0].size[1]);
+  const double s_alone = alone.effects[1].size[1];
+  const int kk = t.d.num_metrics();
+  double beside_shared = NAN;
+  for (const Scope scope : {Scope::kShared, Scope::kPerLight}) {
+    SCOPED_TRACE(ScopeName(scope));
+    const Term kept_term{0, scope, {{-1}}};
+    ModelFit selection = FitTerms(model, {kept_term}, all);
+    ASSERT_TRUE(selection.success) << selection.message;
+    const std::vector<double> by_light =
+        scope == Scope::kShared ? std::vector<double>{-0.2} : std::vector<double>{-0.2, -0.1};
+    ASSERT_EQ(selection.terms[0].values.size(), by_light.size());
+    for (size_t g = 0; g < by_light.size(); ++g) selection.terms[0].values[g][0] = by_light[g];
+    const DetectionLimits beside = FindDetectionLimits(model, all, {}, &selection);
+    ASSERT_EQ(beside.effects.size(), 2u);
+    const double s_beside = beside.effects[1].size[1];
+    ASSERT_TRUE(std::isfinite(s_alone) && std::isfinite(s_beside));
+    std::printf("%s: depth_scale limit alone %+.4f, beside the offset %+.4f\n", ScopeName(scope),
+                s_alone, s_beside);
+    EXPECT_GT(s_beside, 1.5 * s_alone) << "D and D² alike over 4 to 16 m";
+    EXPECT_EQ(beside.effects[0].size[1], alone.effects[0].size[1]);
+    // Both lights on one grid: each light's offset direction takes that light's part of the
+    // scale as the shared one takes the whole.
+    if (scope == Scope::kShared)
+      beside_shared = s_beside;
+    else
+      EXPECT_NEAR(s_beside, beside_shared, 0.01 * beside_shared);
 
-  Design at = t.d;  // the base, the kept offset and the scale at its limit beside it
-  const int kk = at.num_metrics();
-  for (int c = 0; c < at.num_cells(); ++c) {
-    const double dist = at.cells[c].distance_m;
-    at.real[static_cast<size_t>(c) * kk] =
-        t.s.base[static_cast<size_t>(c) * kk] + OffsetLaw(kept_offset, dist) +
-        scale_law(s_beside, dist);
+    for (const double s : {s_beside, s_alone}) {
+      Design at = t.d;  // the base, the kept offset (each light's) and the scale s
+      for (int c = 0; c < at.num_cells(); ++c) {
+        const double dist = at.cells[c].distance_m;
+        const double v = by_light[by_light.size() == 1 ? 0 : at.scenario_light[at.scenario[c]]];
+        at.real[static_cast<size_t>(c) * kk] =
+            t.s.base[static_cast<size_t>(c) * kk] + OffsetLaw(v, dist) + scale_law(s, dist);
+      }
+      const GapModel exact(at, t.s, t.n, fs, &t.pe);
+      const ModelFit kept_only = FitTerms(exact, {kept_term}, all, &selection);
+      const ModelFit both =
+          FitTerms(exact, {kept_term, Term{1, Scope::kShared, {{-1}}}}, all, &selection);
+      ASSERT_TRUE(kept_only.success && both.success);
+      const double drop = kept_only.Deviance() - both.Deviance();
+      const double z2 = beside.z_needed * beside.z_needed;
+      if (s == s_alone) {
+        EXPECT_LT(drop, 0.5 * z2) << "alone, the limit would promise what the fit barely sees";
+        continue;
+      }
+      EXPECT_NEAR(drop, z2, 0.03 * z2);
+      EXPECT_NEAR(both.terms[1].values[0][0], s_beside, 0.03 * s_beside);
+      for (size_t g = 0; g < by_light.size(); ++g)
+        EXPECT_NEAR(both.terms[0].values[g][0], by_light[g], 0.03 * std::fabs(by_light[g]));
+    }
   }
-  const GapModel exact(at, t.s, t.n, fs, &t.pe);
-  const ModelFit offset_only = FitTerms(exact, {Term{0, Scope::kShared, {{-1}}}}, all);
-  const ModelFit both =
-      FitTerms(exact, {Term{0, Scope::kShared, {{-1}}}, Term{1, Scope::kShared, {{-1}}}}, all);
-  ASSERT_TRUE(offset_only.success && both.success);
-  const double drop = offset_only.Deviance() - both.Deviance();
-  EXPECT_NEAR(drop, beside.z_needed * beside.z_needed, 0.03 * beside.z_needed * beside.z_needed);
-  EXPECT_NEAR(both.terms[1].values[0][0], s_beside, 0.03 * s_beside);
-  EXPECT_NEAR(both.terms[0].values[0][0], kept_offset, 0.03 * std::fabs(kept_offset));
-  // Alone, the limit would promise a scale the fit beside the offset barely sees.
-  Design at_alone = t.d;
-  for (int c = 0; c < at_alone.num_cells(); ++c) {
-    const double dist = at_alone.cells[c].distance_m;
-    at_alone.real[static_cast<size_t>(c) * kk] =
-        t.s.base[static_cast<size_t>(c) * kk] + OffsetLaw(kept_offset, dist) +
-        scale_law(s_alone, dist);
+
+  // The bent law: its direction at −0.2 is −0.6·D²/60.8 + 0.04·D, at 0 −D²/60.8.
+  const LimitTable b = make([](double v, double dist) {
+    return -(v + v * v) * dist * dist / 60.8 - 0.1 * v * v * dist;
+  });
+  const GapModel bent(b.d, b.s, b.n, fs, &b.pe);
+  ModelFit at_v = FitTerms(bent, {Term{0, Scope::kShared, {{-1}}}}, all);
+  ASSERT_TRUE(at_v.success) << at_v.message;
+  double limit_at[2];
+  for (int i = 0; i < 2; ++i) {
+    at_v.terms[0].values[0][0] = i == 0 ? -0.2 : 0.0;
+    limit_at[i] = FindDetectionLimits(bent, all, {}, &at_v).effects[1].size[1];
   }
-  const GapModel exact_alone(at_alone, t.s, t.n, fs, &t.pe);
-  const ModelFit o1 = FitTerms(exact_alone, {Term{0, Scope::kShared, {{-1}}}}, all);
-  const ModelFit b1 = FitTerms(
-      exact_alone, {Term{0, Scope::kShared, {{-1}}}, Term{1, Scope::kShared, {{-1}}}}, all);
-  ASSERT_TRUE(o1.success && b1.success);
-  EXPECT_LT(o1.Deviance() - b1.Deviance(), 0.5 * beside.z_needed * beside.z_needed);
+  std::printf("bent law: depth_scale limit beside v = -0.2 %+.4f, beside v = 0 %+.4f\n",
+              limit_at[0], limit_at[1]);
+  ASSERT_TRUE(std::isfinite(limit_at[0]) && std::isfinite(limit_at[1]));
+  EXPECT_GT(std::fabs(limit_at[0] - limit_at[1]), 0.05 * limit_at[1]);
 }
 
 TEST(ChiSquare, SurvivalMatchesKnownQuantiles) {
