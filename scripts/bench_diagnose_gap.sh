@@ -12,7 +12,8 @@ set -euo pipefail
 # A command failing inside an assigned $(...) would end the script without a word under set -e:
 # say which. Figures are assigned before they are printed (scripts/bench_lib.sh).
 trap 'echo "bench_diagnose_gap: line $LINENO failed: $BASH_COMMAND" >&2' ERR
-cd "$(dirname "$0")/.."
+here=$(dirname "$0")  # assigned: a failure here reaches the ERR trap
+cd "$here/.."
 BENCH=bench_diagnose_gap
 source scripts/bench_lib.sh
 BUILD_DIR=${1:-${BUILD_DIR:-build}}

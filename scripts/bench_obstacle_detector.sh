@@ -16,7 +16,8 @@ set -euo pipefail
 # A command failing inside an assigned $(...) would end the script without a word under set -e:
 # say which. Figures are assigned before they are printed (scripts/bench_lib.sh).
 trap 'echo "bench_obstacle_detector: line $LINENO failed: $BASH_COMMAND" >&2' ERR
-cd "$(dirname "$0")/.."
+here=$(dirname "$0")  # assigned: a failure here reaches the ERR trap
+cd "$here/.."
 BENCH=bench_obstacle_detector
 source scripts/bench_lib.sh
 BIN=${BUILD_DIR:-build}/apps
