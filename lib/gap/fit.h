@@ -198,10 +198,10 @@ ModelFit FitBeside(const GapModel& model, const ModelFit& fit, const TermFit& be
 // squares), and FitTerms refines from the best starts: the lowest local minima of that profile
 // (shared), or each group's best node and the shared fit's values when given (per light or
 // scenario). With a discrete axis (a width), every width is tried too (its best node a start),
-// and the width is chosen by Tukey's biweight over the whitened residuals, per light or scenario
-// each group's on its own cells (fit_candidate.cpp, WidthDeviance: a test point whose window
-// metric sits in its other mode under placement counts as one miss); the lowest deviance
-// otherwise.
+// and the fits (Huber's loss, as always) are told apart by Tukey's biweight at 4.5 over the
+// whitened residuals, whatever huber_k is; per light or scenario, each group's width is chosen
+// on its own cells (fit_candidate.cpp, WidthDeviance: a test point whose window metric sits in
+// its other mode under placement counts as one miss). Without one, by the lowest deviance.
 ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
                       const std::vector<char>& train, const ModelFit* shared = nullptr);
 

@@ -196,7 +196,6 @@ ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
       at.discrete_node.push_back(width);
       at.values.push_back(node_values(best_node));
     }
-    if (scope == Scope::kShared) at.discrete_node.resize(1), at.values.resize(1);
     options.push_back(at);
   }
 
@@ -221,7 +220,8 @@ ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
     if (scope != Scope::kShared && !discrete_axes.empty()) fits.push_back(std::move(f));
   }
   // Per group, each group's widths and values from the fit whose WidthDeviance on the group's
-  // cells is lowest; refitted together.
+  // cells is lowest (the calibration's prior, over every group, left out there and counted in the
+  // refit's own WidthDeviance); refitted together.
   if (fits.size() > 1) {
     Option mixed;
     for (int g = 0; g < groups; ++g) {
