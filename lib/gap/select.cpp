@@ -470,55 +470,8 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
     }
   }
   // An effect along the calibration is never selected (it is named "one of" with it), and a
-  // kept effect may stand in for what the calibration cannot give of it: a temporal drift
-  // widens the temporal spread, which a σ_d explains, and moves every median by its mean
-  // disparity, which only an offset explains. Where, with such an effect in the model (the
-  // calibration component it duplicates held at its configured value), the kept one no longer
-  // earns its parameters by BIC, the table cannot tell the two apart: the kept one is named
-  // "one of" with it instead (a drift of 0.8 px/s was kept as an offset of 0.15 px beside a
-  // larger σ_d).
-  if (!r.steps.empty()) {
-    const double log_n_sel = std::log(static_cast<double>(std::max(current.num_obs, 2)));
-    auto bic = [&](const ModelFit& f) { return f.Deviance() + f.num_params * log_n_sel; };
-    // Of several such effects, the one whose model without the kept effect is the best by BIC
-    // is named (the registry's order named the first: a drift's offset was named with the
-    // noise gain, which moves no median).
-    std::vector<char> keep(r.steps.size(), 1);
-    for (size_t i = 0; i < r.steps.size(); ++i) {
-      int named = -1;
-      double named_with = INFINITY, named_without = INFINITY;
-      for (int e = 0; e < n_cand; ++e) {
-        if (!r.effects[e].earns || !model.Absorbs(e)) continue;
-        std::vector<Term> with_terms;
-        ModelFit start = m0;
-        for (size_t j = 0; j < current.terms.size(); ++j) {
-          if (j == i) continue;
-          with_terms.push_back(current.terms[j].term);
-          start.terms.push_back(current.terms[j]);
-        }
-        with_terms.push_back(r.effects[e].fit.term);
-        start.terms.push_back(r.effects[e].fit);
-        const ModelFit without = FitTerms(model, with_terms, train, &start);
-        with_terms.push_back(current.terms[i].term);
-        start.terms.push_back(current.terms[i]);
-        const ModelFit with = FitTerms(model, with_terms, train, &start);
-        if (!without.success || !with.success || bic(with) < bic(without)) continue;
-        if (bic(without) < named_without)
-          named = e, named_with = bic(with), named_without = bic(without);
-      }
-      if (named < 0) continue;
-      keep[i] = 0;
-      const int ci = r.chosen[i];
-      r.ambiguous.push_back({{r.steps[i].effect, r.effects[named].name},
-                             {SizeText(sims.surfaces[ci].candidate, current.terms[i]),
-                              SizeText(sims.surfaces[named].candidate, r.effects[named].fit)},
-                             NAN, "", {}});
-      r.dropped.push_back(r.steps[i].effect + " (beside " + r.effects[named].name +
-                          ", along the calibration, it no longer earns its parameters: BIC " +
-                          Num(named_with) + " with it, " + Num(named_without) + " without)");
-    }
-    keep_only(keep);
-  }
+  // kept effect it can stand in for is named "one of" with it too (AlongCalibration).
+  if (!r.steps.empty()) keep_only(AlongCalibration(model, m0, current, train, &r));
   r.m0 = std::move(m0);
   r.m0_ho = std::move(m0_ho);
   r.current = std::move(current);

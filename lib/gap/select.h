@@ -65,6 +65,25 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
                  const std::vector<char>& train, const std::vector<int>& fold, int num_folds,
                  const DiagnoseParams& params);
 
+// The rule on a kept effect and the effects along the calibration (Select). A kept effect may
+// stand in for what the calibration cannot give of such an effect: a temporal drift widens the
+// temporal spread, which a σ_d explains, and moves every median by its mean disparity, which only
+// an offset explains. Where, with such an effect in the model (the calibration component it
+// duplicates held at its configured value), a kept effect no longer earns its parameters by BIC,
+// the table cannot tell the two apart: the kept one is named "one of" with it (r->ambiguous,
+// r->dropped) instead (a drift of 0.8 px/s was kept as an offset of 0.15 px beside a larger σ_d).
+// One at a time, the kept effect the table needs least first, each judged beside those still
+// kept: two kept effects that each stand in for the other beside the drift are not both dropped
+// (an offset and a scale, each no longer earning beside the other and a drift, were both
+// named with it, and a 1.6 m over-read left unexplained). The model with a kept effect holds the
+// one without it, so it is also fitted from that one's values with the effect at its neutral
+// value, and the lower deviance kept (from the kept values alone it ended 2 to 27 above the
+// model it holds). Returns which of r->steps stay; `current` is the selection fitted together
+// (its terms in the steps' order), `m0` the calibrated base.
+std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
+                                   const ModelFit& current, const std::vector<char>& train,
+                                   Selection* r);
+
 // Keeps the steps marked in `keep` and their terms in `current`, refitted together from the
 // calibrated base `m0` on the cells marked in `train` and cross-validated over `fold` (`chosen`,
 // when given, follows the steps). False when the refit fails: the kept terms then stay at the

@@ -1397,6 +1397,99 @@ TEST(DiscreteWidth, ATestPointInTheOtherModeDoesNotChooseIt) {
   }
 }
 
+// A surface added to a MedianTable: `law` of its node's values and the distance on the median.
+void AddMedianSurface(LimitTable* t, const Candidate& candidate,
+                      const std::function<double(double, double)>& law) {
+  Surface surf;
+  surf.candidate = candidate;
+  surf.num_nodes = static_cast<int>(candidate.axes[0].nodes.size());
+  const int kk = t->d.num_metrics();
+  for (int c = 0; c < t->d.num_cells(); ++c)
+    for (int k = 0; k < kk; ++k)
+      for (int node = 0; node < surf.num_nodes; ++node)
+        surf.table.push_back(t->s.base[static_cast<size_t>(c) * kk + k] +
+                             (k == 0 ? law(candidate.axes[0].nodes[node],
+                                           t->d.cells[c].distance_m)
+                                     : 0));
+  t->s.surfaces.push_back(surf);
+}
+
+// Two kept effects that each stand in for the other beside an effect along the calibration are
+// not both named with it (AlongCalibration). The median departs by an offset's law (−0.5 px,
+// read far ∝ D²) and a scale's (6 %, ∝ D), under placement scatter; a third candidate, along the
+// calibration, moves the median by rate × (the offset's law at −1 px − 25 % of D). Beside it,
+// either kept effect gives the other's part (at a rate of 0.5 or −0.24), so each no longer earns
+// beside it and the other; it alone cannot give both. Judged together (the rule as it was, checked
+// by hand), both were dropped and the gap left to nothing; one at a time, one is named "one of"
+// with it and the other stays.
+TEST(AlongCalibration, TwoKeptEffectsThatStandInForEachOtherAreNotBothDropped) {
+  Candidate offset, scale, drift;
+  for (const Candidate& c : DefaultCandidates()) {
+    if (c.effect == "disparity_offset") offset = c;
+    if (c.effect == "depth_scale") scale = c;
+    if (c.effect == "temporal_drift") drift = c;
+  }
+  for (Candidate* c : {&offset, &scale, &drift}) c->range_law = false;  // the laws as given
+  auto truth = [](const records::PanelMetrics& r) {
+    return OffsetLaw(-0.5, r.distance_m) + 0.06 * r.distance_m;
+  };
+  LimitTable t = MedianTable(PlacedGrid(43, truth), offset,
+                             [](const std::vector<double>& v, double d) {
+                               return OffsetLaw(v[0], d);
+                             });
+  AddMedianSurface(&t, scale, [](double v, double d) { return v * d; });
+  AddMedianSurface(&t, drift,
+                   [](double v, double d) { return v * (OffsetLaw(-1, d) - 0.25 * d); });
+  const std::vector<char> all(t.d.num_cells(), 1);
+  GapModel model(t.d, t.s, t.n, FitSettings(), &t.pe);
+  model.SetAbsorbs(2, 1);  // the drift along σ_d
+  const ModelFit m0 = FitTerms(model, {}, all);
+  ASSERT_TRUE(m0.success) << m0.message;
+  Selection r;
+  for (int i = 0; i < 3; ++i) {
+    const ModelFit alone = FitCandidate(model, i, Scope::kShared, all);
+    ASSERT_TRUE(alone.success) << alone.message;
+    EffectResult e;
+    e.name = t.s.surfaces[i].candidate.effect;
+    e.fit = alone.terms[0];
+    e.earns = true;
+    r.effects.push_back(e);
+  }
+  const std::vector<Term> kept{r.effects[0].fit.term, r.effects[1].fit.term};
+  ModelFit start = m0;
+  start.terms = {r.effects[0].fit, r.effects[1].fit};
+  const ModelFit current = FitTerms(model, kept, all, &start);
+  ASSERT_TRUE(current.success) << current.message;
+  std::printf("kept together: offset %.3f px, scale %.4f\n", current.terms[0].values[0][0],
+              current.terms[1].values[0][0]);
+  // The premise: beside the drift either kept effect fits as the two do; the drift alone cannot.
+  auto deviance = [&](const std::vector<int>& set) {
+    std::vector<Term> terms;
+    ModelFit from = m0;
+    for (int i : set) {
+      terms.push_back(r.effects[i].fit.term);
+      from.terms.push_back(r.effects[i].fit);
+    }
+    const ModelFit f = FitTerms(model, terms, all, &from);
+    EXPECT_TRUE(f.success) << f.message;
+    return f.Deviance();
+  };
+  const double both = current.Deviance();
+  std::printf("deviance: both %.1f, offset + drift %.1f, scale + drift %.1f, drift %.1f\n", both,
+              deviance({0, 2}), deviance({1, 2}), deviance({2}));
+  EXPECT_LT(deviance({0, 2}), both + 10);
+  EXPECT_LT(deviance({1, 2}), both + 10);
+  EXPECT_GT(deviance({2}), both + 100);
+  r.steps = {{"disparity_offset"}, {"depth_scale"}};
+  r.chosen = {0, 1};
+  const std::vector<char> keep = AlongCalibration(model, m0, current, all, &r);
+  ASSERT_EQ(keep.size(), 2u);
+  for (const std::string& d : r.dropped) std::printf("dropped: %s\n", d.c_str());
+  EXPECT_EQ(keep[0] + keep[1], 1);
+  ASSERT_EQ(r.ambiguous.size(), 1u);
+  EXPECT_EQ(r.ambiguous[0].effects.back(), "temporal_drift");
+}
+
 // The keep rule's share (MovedShare): two metrics, three observations each (observation o is
 // metric o % 2). The change moves metric 0 only: its share is that metric's, whatever gap
 // metric 1 holds (read as a share of the whole, a gap of 100 there would take it from 0.75 to

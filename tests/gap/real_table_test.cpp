@@ -174,15 +174,19 @@ TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   }
 }
 
-// At seeds 2 and 3 the same offset (−0.95 px there) is not kept. At seed 3 the whole table
-// selects a depth scale of +19.7 %, and the outer folds choose the offset as often as the scale
-// (two each); at seed 2 it selects a radial disparity residual that no fold chooses, while three
-// folds choose the offset (until a window effect's width was chosen by the biweight, the whole
-// table selected a scale there that one fold chose). The report names the pair "one of", the
-// folds' choices as its reason, instead of keeping either law (at seed 2 it named nothing
-// before). With the scale's grid at ±12 % the folds split between
-// the two at seed 3 and neither was kept, and the pair was named for that split. The null
-// tables of seeds 1–5 and 7 (120) name no such pair (docs/gap/cases.md).
+// At seeds 2 and 3 the same offset (−0.908 and −0.952 px there) is not kept. At seed 3 the
+// whole table selects a depth scale of +19.7 %, and the outer folds choose the offset as often
+// as the scale (two each): the report names the pair "one of", the folds' choices as its reason, instead of
+// keeping either law. With the scale's grid at ±12 % the folds split between the two at seed 3
+// and neither was kept, and the pair was named for that split. The null tables of seeds 1–5
+// and 7 (120) name no such pair (docs/gap/cases.md). At seed 2 the whole table keeps the offset
+// beside a radial residual and the emitter, three folds of four choose it, and the folds'
+// selections together remove 8.0 % of the calibrated base's held-out gap (10 % needed): it is
+// not kept, and what it leaves is reported as the open world reports it, a median over-read in
+// every recording growing ∝ D² (5.5 m at 16 m). Until the rule on effects along the
+// calibration met kept effects one at a time (select.h, AlongCalibration) the offset and the
+// scale were both dropped there beside the invalidation gain, each judged beside the other, and
+// the pair named was {radial residual, offset}.
 TEST(Article, AnOffsetTheFoldsSplitWithARivalIsNamedOneOfThem) {
   std::vector<records::PanelMetrics> rows =
       io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");
@@ -190,14 +194,7 @@ TEST(Article, AnOffsetTheFoldsSplitWithARivalIsNamedOneOfThem) {
   ScreenRows(DesignRulesOf(base.sensor), &rows);
   DiagnoseParams params;
   params.simulate.threads = 2;
-  struct Split {
-    int seed;
-    const char* how_often;
-    const char* rival;
-  };
-  for (const Split& split : {Split{3, "at least as often", "depth_scale"},
-                             Split{2, "more often", "radial_disparity_residual"}}) {
-    const int seed = split.seed;
+  for (const int seed : {3, 2}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     base.seed = seed;
     const std::vector<CaseOutcome> outcomes = RunRealInjectionCases(
@@ -205,18 +202,27 @@ TEST(Article, AnOffsetTheFoldsSplitWithARivalIsNamedOneOfThem) {
     ASSERT_EQ(outcomes.size(), 1u);
     const std::string& json = outcomes[0].gap_json;
     EXPECT_TRUE(outcomes[0].selected.empty()) << "kept now: move this test's seed";
+    if (seed == 2) {
+      const size_t open = json.find("\"unexplained\": [");
+      ASSERT_NE(open, std::string::npos);
+      const size_t median = json.find("\"metric\": \"median_bias_m\"", open);
+      ASSERT_NE(median, std::string::npos) << json.substr(open, 800);
+      const std::string entry = json.substr(median, 300);
+      EXPECT_NE(entry.find("\"where\": \"every recording\""), std::string::npos) << entry;
+      EXPECT_NE(entry.find("\"form\": \"∝ D²\""), std::string::npos) << entry;
+      continue;
+    }
     const size_t ambiguous = json.find("\"ambiguous\": [");
     ASSERT_NE(ambiguous, std::string::npos);
     const size_t why =
-        json.find(std::string("\"why\": \"the outer folds choose disparity_offset ") +
-                      split.how_often,
+        json.find("\"why\": \"the outer folds choose disparity_offset at least as often",
                   ambiguous);
     ASSERT_NE(why, std::string::npos) << json.substr(ambiguous, 600);
     const size_t entry = json.rfind("\"one_of\": [", why);
     ASSERT_NE(entry, std::string::npos);
     const std::string one_of = json.substr(entry, why - entry);
     EXPECT_NE(one_of.find("\"disparity_offset\""), std::string::npos) << one_of;
-    EXPECT_NE(one_of.find(std::string("\"") + split.rival + "\""), std::string::npos) << one_of;
+    EXPECT_NE(one_of.find("\"depth_scale\""), std::string::npos) << one_of;
   }
 }
 

@@ -664,12 +664,15 @@ std::string NestedFolds(const std::string& json) {
 // resolved its small strengths: the case had passed only because a spurious edge mixing in two
 // folds failed the folds' simulated check). With the drift in the model the offset no longer
 // earns its parameter: it is named "one of" with the drift and nothing is selected, by the
-// whole table and by every outer fold, which runs the same rule on its training cells (run
+// whole table and by the outer folds, which run the same rule on their training cells (run
 // after the folds on the whole table alone, it left three folds keeping the offset, and the
 // nested figures measured a procedure that was not the one reported). Of the effects along the
 // calibration beside which the offset no longer earns, the best by BIC is named: the drift (BIC
-// 743 without the offset), not the noise gain that comes first in the registry and moves no
-// median, which the rule named while it took the first.
+// 729 without the offset, 732 with it), not the noise gain that comes first in the registry and
+// moves no median, which the rule named while it took the first. Since the model with the offset
+// is also fitted from the one without it (select.h, AlongCalibration), the fold holding 8 m out
+// keeps it (0.151 px): there it earns its parameter beside the drift. Three folds of four, and
+// the whole table, do not.
 TEST(Cases, AnOffsetADriftExplainsIsNamedWithIt) {
   const std::vector<CaseOutcome> out = OneCase("temporal_drift large", 1);
   ASSERT_EQ(out.size(), 1u);
@@ -678,7 +681,13 @@ TEST(Cases, AnOffsetADriftExplainsIsNamedWithIt) {
   EXPECT_NE(out[0].gap_json.find("disparity_offset (beside temporal_drift"), std::string::npos);
   const std::string folds = NestedFolds(out[0].gap_json);
   ASSERT_NE(folds.find("\"held\": \"distance 16 m\""), std::string::npos) << folds;
-  EXPECT_EQ(folds.find("\"disparity_offset\""), std::string::npos) << folds;
+  int keeping = 0;  // the outer folds that keep the offset
+  for (size_t at = folds.find("\"held\": "); at != std::string::npos;) {
+    const size_t next = folds.find("\"held\": ", at + 1);
+    keeping += folds.substr(at, next - at).find("\"disparity_offset\"") != std::string::npos;
+    at = next;
+  }
+  EXPECT_LE(keeping, 1) << folds;
 }
 
 // The number after the last of `anchors`, each found after the one before, in a gap.json (NaN

@@ -1,0 +1,98 @@
+// The rule on a kept effect and the effects along the calibration (select.h, AlongCalibration).
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "gap/report_util.h"
+#include "gap/select.h"
+
+namespace depthbias::gap {
+namespace {
+
+// `kept` with its continuous axes that have a neutral value at that value, the effect absent
+// (its discrete nodes stay, as FitTerms holds them). False where no such axis leaves it absent
+// (a region spill's neutral is a width of 0, a node of its own).
+bool AtNeutral(const Candidate& candidate, TermFit* kept) {
+  bool absent = false;
+  for (size_t a = 0; a < candidate.axes.size(); ++a) {
+    const Axis& axis = candidate.axes[a];
+    if (axis.discrete || !std::isfinite(axis.neutral)) continue;
+    for (auto& group : kept->values)
+      if (a < group.size()) group[a] = axis.neutral;
+    absent = true;
+  }
+  return absent;
+}
+
+}  // namespace
+
+std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
+                                   const ModelFit& current, const std::vector<char>& train,
+                                   Selection* r) {
+  const Simulations& sims = model.sims();
+  const int n_cand = static_cast<int>(sims.surfaces.size());
+  const double log_n = std::log(static_cast<double>(std::max(current.num_obs, 2)));
+  auto bic = [&](const ModelFit& f) { return f.Deviance() + f.num_params * log_n; };
+  std::vector<char> keep(r->steps.size(), 1);
+  for (;;) {
+    // Per kept effect, of several effects along the calibration, the one whose model without
+    // the kept effect is the best by BIC is named (the registry's order named the first: a
+    // drift's offset was named with the noise gain, which moves no median).
+    int drop = -1, drop_named = -1;
+    double drop_margin = -INFINITY, drop_with = NAN, drop_without = NAN;
+    for (size_t i = 0; i < r->steps.size(); ++i) {
+      if (!keep[i]) continue;
+      const Candidate& kept = sims.surfaces[current.terms[i].term.candidate].candidate;
+      int named = -1;
+      double named_with = INFINITY, named_without = INFINITY;
+      for (int e = 0; e < n_cand; ++e) {
+        if (!r->effects[e].earns || !model.Absorbs(e)) continue;
+        std::vector<Term> with_terms;
+        ModelFit start = m0;
+        for (size_t j = 0; j < current.terms.size(); ++j) {
+          if (j == i || !keep[j]) continue;
+          with_terms.push_back(current.terms[j].term);
+          start.terms.push_back(current.terms[j]);
+        }
+        with_terms.push_back(r->effects[e].fit.term);
+        start.terms.push_back(r->effects[e].fit);
+        const ModelFit without = FitTerms(model, with_terms, train, &start);
+        with_terms.push_back(current.terms[i].term);
+        start.terms.push_back(current.terms[i]);
+        ModelFit with = FitTerms(model, with_terms, train, &start);
+        TermFit absent = current.terms[i];
+        if (without.success && AtNeutral(kept, &absent)) {
+          ModelFit from = without;
+          from.terms.push_back(absent);
+          ModelFit nested = FitTerms(model, with_terms, train, &from);
+          if (nested.success && (!with.success || nested.Deviance() < with.Deviance()))
+            with = std::move(nested);
+        }
+        if (!without.success || !with.success || bic(with) < bic(without)) continue;
+        if (bic(without) < named_without)
+          named = e, named_with = bic(with), named_without = bic(without);
+      }
+      if (named < 0 || !(named_with - named_without > drop_margin)) continue;
+      drop = static_cast<int>(i), drop_named = named;
+      drop_margin = named_with - named_without, drop_with = named_with,
+      drop_without = named_without;
+    }
+    if (drop < 0) break;
+    keep[drop] = 0;
+    const int ci = r->chosen[drop];
+    const std::string& name = r->steps[drop].effect;
+    const EffectResult& other = r->effects[drop_named];
+    r->ambiguous.push_back({{name, other.name},
+                            {SizeText(sims.surfaces[ci].candidate, current.terms[drop]),
+                             SizeText(sims.surfaces[drop_named].candidate, other.fit)},
+                            NAN, "", {}});
+    r->dropped.push_back(name + " (beside " + other.name +
+                         ", along the calibration, it no longer earns its parameters: BIC " +
+                         text::Num(drop_with) + " with it, " + text::Num(drop_without) +
+                         " without)");
+  }
+  return keep;
+}
+
+}  // namespace depthbias::gap
