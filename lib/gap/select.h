@@ -77,7 +77,7 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
 // (an offset and a scale, each no longer earning beside the other and a drift, were both
 // named with it, and a 1.6 m over-read left unexplained). The model with a kept effect holds the
 // one without it, so it is also fitted from that one's values with the effect at its neutral
-// value, and the lower deviance kept (from the kept values alone it ended 2 to 27 above the
+// value, and the lower deviance kept (from the kept values alone it ended 2 to 26 above the
 // model it holds). Returns which of r->steps stay; `current` is the selection fitted together
 // (its terms in the steps' order), `m0` the calibrated base.
 std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
