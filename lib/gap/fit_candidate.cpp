@@ -196,11 +196,13 @@ ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
       at.discrete_node.push_back(width);
       at.values.push_back(node_values(best_node));
     }
-    options.push_back(at);
+    // A width whose best node is already a start (a local minimum of the profile) is fitted once.
+    if (std::none_of(options.begin(), options.end(), [&](const Option& o) {
+          return o.discrete_node == at.discrete_node && o.values == at.values;
+        }))
+      options.push_back(at);
   }
 
-  ModelFit best;
-  double best_value = INFINITY;
   auto value_of = [&](const ModelFit& f) {
     return discrete_axes.empty() ? f.Deviance() : WidthDeviance(model, f, train);
   };
@@ -211,18 +213,21 @@ ModelFit FitCandidate(const GapModel& model, int candidate, Scope scope,
     start.terms[0].values = opt.values;
     return FitTerms(model, {start.terms[0].term}, train, &start);
   };
-  std::vector<ModelFit> fits;
+  std::vector<ModelFit> fits;  // the successful fits, in the options' order
+  size_t lowest_fit = 0;
+  double best_value = INFINITY;
   for (const Option& opt : options) {
     ModelFit f = fit_from(opt);
     if (!f.success) continue;
     const double v = value_of(f);
-    if (!best.success || v < best_value) best = f, best_value = v;
-    if (scope != Scope::kShared && !discrete_axes.empty()) fits.push_back(std::move(f));
+    if (fits.empty() || v < best_value) lowest_fit = fits.size(), best_value = v;
+    fits.push_back(std::move(f));
   }
+  ModelFit best = fits.empty() ? ModelFit() : fits[lowest_fit];
   // Per group, each group's widths and values from the fit whose WidthDeviance on the group's
   // cells is lowest (the calibration's prior, over every group, left out there and counted in the
   // refit's own WidthDeviance); refitted together.
-  if (fits.size() > 1) {
+  if (scope != Scope::kShared && !discrete_axes.empty() && fits.size() > 1) {
     Option mixed;
     for (int g = 0; g < groups; ++g) {
       std::vector<char> cells(d.num_cells(), 0);
