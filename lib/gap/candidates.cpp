@@ -21,9 +21,14 @@ Axis Continuous(const std::string& param, std::vector<double> nodes, double neut
 // small effect is resolved. Gains are interpolated in their logarithm.
 std::vector<Candidate> MakeCandidates() {
   std::vector<Candidate> c;
+  // The offset's node at −1.5 px: the article's rows keep an over-reading offset only from
+  // −0.66 px, and one of 1.5 times that (−0.92 to −0.99 px) was fitted at a grid ending at −1 px,
+  // at its edge. A node at +1.5 px as well moved the 32-row unit's offset fits off their
+  // minimum (a depth scale taken in its place; docs/gap/cases.md).
   c.push_back({"disparity_offset",
-               {Continuous("delta_px", {-1, -0.5, -0.25, -0.1, -0.04, 0, 0.04, 0.1, 0.25, 0.5, 1},
-                           0, 0.1)}});
+               {Continuous("delta_px",
+                           {-1.5, -1, -0.5, -0.25, -0.1, -0.04, 0, 0.04, 0.1, 0.25, 0.5, 1}, 0,
+                           0.1)}});
   // The depth scale's nodes reach ±20 %: the article's rows keep an over-reading scale only from
   // +10.7 %, and a scale of 1.5 times that (+16 %) injected into them lay beyond a grid that
   // ended at ±12 %, where it was kept at the edge (0.12) or taken by an offset of −0.74 px.

@@ -107,10 +107,14 @@ bool IsRealInjectionCase(const std::string& name);
 // δ/(f·B)); valid_pct and disparity-unit columns stay. A depth scale s reads every depth and
 // the range 1 + s times and leaves the tilt. The panel's extent (width, height), measured in
 // panel_extract's window of the panel's known size on the measured plane: read far it stays,
-// read near it shrinks with the panel's image, by Z'/Z (or 1 + s), the bound (MapRow). Throws
-// std::invalid_argument for another effect, or an offset that sends a depth beyond infinity.
+// read near it shrinks with the panel's image, by Z'/Z (or 1 + s), the bound (MapRow). plane_std
+// grows no further than a uniform spread over the panel's shorter side, s/√12, where the plane
+// fit's smallest axis turns into the panel's plane (the row's measured extent, else
+// `panel_side_m`). Throws std::invalid_argument for another effect, or an offset that sends a
+// depth beyond infinity.
 std::vector<records::PanelMetrics> InjectIntoRealTable(
-    const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb);
+    const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb,
+    double panel_side_m);
 
 // The null suite: no effect, 2 % placement scatter (tables at seeds seed0 + i).
 std::vector<WithheldCase> NullCases(int count);

@@ -27,11 +27,20 @@ namespace {
 // bound (the simulator's +0.35 px offset, 7.9 % near at 16 m, measured 4.8 % narrower); the
 // cases inject on the far side only. A table measured in a fixed box (panel_extract --box)
 // would follow `length` on both sides.
-void MapRow(double length, double spread, double tilt, records::PanelMetrics* m) {
+// plane_std is the root of the smallest eigenvalue of the region's samples' scatter
+// (metrics::FitPlane): once the spread along the normal reaches the in-plane spread of the
+// panel's extent (uniform over a side s: s/√12, 0.289 m for 1 m), the smallest axis lies in the
+// plane and the metric stays there (the simulator's daylight/HD cells at 12 and 16 m read
+// 0.280–0.287 m with or without a −0.97 px offset). The spread's map stops there, at the
+// shorter side measured (`side_m` where the row has none); a row beyond it keeps its value.
+void MapRow(double length, double spread, double tilt, double side_m, records::PanelMetrics* m) {
   const double tail = m->mean_m - m->median_m;
   m->median_m *= length;
   m->mean_m = m->median_m + spread * tail;
-  m->plane_std_m *= spread;
+  if (std::isfinite(m->panel_width_m) && std::isfinite(m->panel_height_m))
+    side_m = std::min(m->panel_width_m, m->panel_height_m);
+  const double most = std::max(m->plane_std_m, side_m / std::sqrt(12.0));
+  m->plane_std_m = std::min(m->plane_std_m * spread, most);
   m->temporal_std_m *= spread;
   m->panel_width_m *= std::min(1.0, length);
   m->panel_height_m *= std::min(1.0, length);
@@ -103,7 +112,8 @@ bool IsRealInjectionCase(const std::string& name) {
 }
 
 std::vector<records::PanelMetrics> InjectIntoRealTable(
-    const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb) {
+    const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb,
+    double panel_side_m) {
   std::vector<records::PanelMetrics> rows = real;
   for (const Injection& in : c.injected) {
     const bool offset = in.effect == "disparity_offset";
@@ -117,7 +127,7 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
       if (!in.only_light.empty() && m.light != in.only_light) continue;
       if (!(m.median_m > 0)) continue;  // nothing measured: the row stays as it was
       if (!offset) {
-        MapRow(1.0 + p->second, 1.0 + p->second, 1.0, &m);
+        MapRow(1.0 + p->second, 1.0 + p->second, 1.0, panel_side_m, &m);
         continue;
       }
       const double d = fb / m.median_m + p->second;
@@ -125,7 +135,7 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
         throw std::invalid_argument(c.name + ": an offset of " + std::to_string(p->second) +
                                     " px sends " + m.bag + " beyond infinity");
       const double r = fb / d / m.median_m;
-      MapRow(r, r * r, r, &m);
+      MapRow(r, r * r, r, panel_side_m, &m);
     }
   }
   return rows;
@@ -163,7 +173,9 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
   std::vector<CaseOutcome> out;
   for (const WithheldCase& c : RealInjectionCases(reference.limits, label, times)) {
     if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end()) continue;
-    const std::vector<records::PanelMetrics> rows = InjectIntoRealTable(real, c, fb);
+    const sim::SceneParams& scene = base.protocol.scene;
+    const std::vector<records::PanelMetrics> rows =
+        InjectIntoRealTable(real, c, fb, std::min(scene.panel_width_m, scene.panel_height_m));
     const std::string j = json(diagnose(rows, c.name), c.name);
     out.push_back(JudgeCase(j, c, rows, reference_json));
     out.back().gap_json = j;

@@ -17,19 +17,20 @@
 //     per group kept only where it also beats the shared fit held out by one standard
 //     error), ranked by
 //     ΔBIC = D(reference) − D(effect) − k·ln n and by its held-out gain (the reference's held-out
-//     deviance minus its own); each metric's dispersion φ (≥ 1: how much wider than the
-//     replicates' noise and placement its residuals are about the widest model, every
+//     deviance minus its own); each metric's dispersions φ and ψ (≥ 1: how much wider than
+//     the replicates' noise the recordings of a test point spread about their mean, and than
+//     the placement law the test points' means, about the widest model, every
 //     continuous candidate fitted together: about the reference, a missing effect would widen
-//     its own metric's φ until that metric no longer counts) puts the metrics on one footing.
-//     Forward selection then adds the effect of largest held-out gain while it earns both
-//     ΔBIC > 0 and a held-out gain > 0 (at that φ). Signatures
+//     its own metric's dispersions until that metric no longer counts) put the metrics on one
+//     footing. Forward selection then adds the effect of largest held-out gain while it earns
+//     both ΔBIC > 0 and a held-out gain > 0 (at those dispersions). Signatures
 //     (each effect's change of the metrics at a typical size, in noise units, the calibration's
 //     directions projected out) are compared pairwise: |r| ≥ confounded_r is reported as
 //     confounded, and an effect confounded with one already selected is not added.
 //     An effect confounded with the calibration is never selected: with an effect confounded
 //     with a selected one it is named as "one of {a, b}" with the size each would need.
 //  4. How far, nested: an outer hold-out (leave one distance out by default) wraps everything
-//     fitted (noise, placement, calibration, φ, scope, selection); each outer fold's selection
+//     fitted (noise, placement, calibration, φ and ψ, scope, selection); each outer fold's selection
 //     predicts its held-out cells additively and is simulated there at its fitted values
 //     (shrink_heldout_nested_pct, shrink_simulated_pct: the headline). An effect selected on
 //     the whole table stays only if it is selected in at least half of the outer folds and
@@ -291,7 +292,7 @@ struct DiagnoseResult {
   std::vector<sim::ScenarioParams> configured, calibrated;  // per scenario
   ModelFit calibration;           // the calibrated base (reference)
   GapStat calibration_in, calibration_heldout;
-  std::vector<double> dispersion;  // per compared metric, about the widest model (select.h)
+  std::vector<double> dispersion;  // φ then ψ per compared metric, about the widest model
   std::vector<EffectResult> effects;  // every candidate alone, best ΔBIC first
   std::vector<Confounded> confounded;
   std::vector<Confounded> correlations;  // every pair of effects' signature correlation

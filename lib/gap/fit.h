@@ -5,15 +5,17 @@
 //
 // For an observation (cell c, compared metric k) with real value y and base simulation b:
 //   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)                   (1)
-//   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · (diag(σ²) + τ_k(D_t)² · 11ᵀ)                          (2)
+//   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · diag(σ²) + ψ_k · τ_k(D_t)² · 11ᵀ                       (2)
 // Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
 // the term's group of the cell (one shared group, the cell's light or its scenario: Scope); n_s
 // the scenario's calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J
 // simulated at the base;
 // σ the replicate noise (noise.h), τ the placement scatter of the test point t the recordings
 // share (placement.h: one random effect per test point and metric, so the recordings of one
-// placement count as one piece of evidence, not four), and φ_k the metric's dispersion (how
-// much wider than that the residuals are, ≥ 1); the residuals are whitened block by block
+// placement count as one piece of evidence, not four), and φ_k, ψ_k the metric's dispersions
+// (how much wider than the replicate noise the recordings of one test point spread about their
+// mean, and how much wider than the placement law the test points' means spread, each ≥ 1:
+// select.h, Dispersion); the residuals are whitened block by block
 // (test point × metric). Effects of several terms add (in the metrics' own scales).
 // Ceres minimizes the deviance
 //   D = Σ 2ρ(r) + Σ_s (n_σ,s/τ_σ)² + (n_p,s/τ_p)²                                     (3)
@@ -122,7 +124,7 @@ class GapModel {
   double replicate_noise(size_t obs) const { return sigma_[obs]; }
   double placement(size_t obs) const { return total_[obs] > sigma_[obs] ?
       std::sqrt(total_[obs] * total_[obs] - sigma_[obs] * sigma_[obs]) : 0.0; }
-  double weight(size_t obs) const;  // 1 / (√(σ² + τ²)·√φ_k)
+  double weight(size_t obs) const;  // 1 / √(φ_k·σ² + ψ_k·τ²)
 
   // The observations grouped in blocks (test point × metric), each block's whitening L⁻¹ of
   // (2) row-major; obs sorted block by block, starts[b] the first of block b (and the end).
@@ -132,8 +134,10 @@ class GapModel {
     std::vector<std::vector<double>> linv;
   };
   Whitening Whiten(const std::vector<size_t>& obs) const;
+  // The dispersions, per compared metric φ_k (the replicate noise's) then ψ_k (the placement
+  // scatter's): 2 × metrics values; given one per metric, both take it.
   const std::vector<double>& dispersion() const { return phi_; }
-  void SetDispersion(const std::vector<double>& phi) { phi_ = phi; }
+  void SetDispersion(const std::vector<double>& phi);
   // A candidate's surface as the fits read it: the simulations' own, a range law's window
   // metrics averaged over the placement scatter's law (smooth.h: AverageOverPlacement).
   const Surface& surface(int candidate) const {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
 
 #include <Eigen/Dense>
@@ -32,7 +33,7 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
   total_.assign(n, NAN);
   block_.assign(n, -1);
   valid_.assign(n, 0);
-  phi_.assign(k_count, 1.0);
+  phi_.assign(2 * static_cast<size_t>(k_count), 1.0);
   for (int c = 0; c < design.num_cells(); ++c)
     for (int k = 0; k < k_count; ++k) {
       const size_t o = static_cast<size_t>(c) * k_count + k;
@@ -77,8 +78,22 @@ int GapModel::Frozen(const std::vector<Term>& terms) const {
   return mask;
 }
 
+void GapModel::SetDispersion(const std::vector<double>& phi) {
+  const size_t k_count = static_cast<size_t>(num_metrics());
+  if (phi.size() == k_count) {
+    phi_ = phi;
+    phi_.insert(phi_.end(), phi.begin(), phi.end());
+  } else if (phi.size() == 2 * k_count) {
+    phi_ = phi;
+  } else {
+    throw std::invalid_argument("dispersion: not one or two values per compared metric");
+  }
+}
+
 double GapModel::weight(size_t obs) const {
-  return 1.0 / (total_[obs] * std::sqrt(phi_[obs % design_.num_metrics()]));
+  const size_t k = obs % num_metrics();
+  const double s = sigma_[obs], t = placement(obs);
+  return 1.0 / std::sqrt(phi_[k] * s * s + phi_[num_metrics() + k] * t * t);
 }
 
 GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
@@ -100,9 +115,9 @@ GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
     for (int r = 0; r < n; ++r)
       for (int c = 0; c < n; ++c) {
         const size_t a = w.obs[i + r], b = w.obs[i + c];
-        const double phi = phi_[a % k_count];
+        const double phi = phi_[a % k_count], psi = phi_[k_count + a % k_count];
         const double ta = placement(a), tb = placement(b);
-        cov(r, c) = phi * (ta * tb + (r == c ? sigma_[a] * sigma_[a] : 0.0));
+        cov(r, c) = psi * ta * tb + (r == c ? phi * sigma_[a] * sigma_[a] : 0.0);
       }
     const Eigen::MatrixXd l = cov.llt().matrixL();
     const Eigen::MatrixXd linv =

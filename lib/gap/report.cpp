@@ -266,7 +266,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     w.Number("placement_exponent", info.placement_exponent);
     w.String("noise_method", r.noise.method[k]);
     w.Integer("noise_pairs", r.noise.pairs[k]).Number("dispersion", r.dispersion[k]);
-    w.EndObject();
+    w.Number("dispersion_placement", r.dispersion[r.metric_names.size() + k]).EndObject();
   }
   w.EndArray();
 
@@ -459,18 +459,18 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
   o << "## 1. The gap\n\n"
     << "Per recording and metric, z = (real − simulated) / noise. The noise of each metric is "
     << "measured, not assumed; how is said per metric. The gap is the mean of z² over the "
-    << "table: 1 means the simulator is as close to the camera as the camera is to itself; the "
-    << "dispersion φ is how much wider than that the residuals are about the widest model (every "
-    << "continuous candidate effect fitted together; it weighs the metrics against each other "
-    << "in the fits).\n\n"
-    << "| metric | unit | noise at 10 m | noise ∝ (Z/10 m)^ | measured from | φ | baseline gap | "
-       "held-out cells |\n|---|---|---|---|---|---|---|---|\n";
+    << "table: 1 means the simulator is as close to the camera as the camera is to itself. About "
+    << "the widest model (every continuous candidate effect fitted together), the dispersion φ is "
+    << "how much wider than the replicate noise a test point's recordings spread about their "
+    << "mean, ψ how much wider than the placement law the test points' means spread.\n\n"
+    << "| metric | unit | noise at 10 m | noise ∝ (Z/10 m)^ | measured from | φ | ψ | baseline "
+       "gap | held-out cells |\n|---|---|---|---|---|---|---|---|---|\n";
   for (int k = 0; k < kk; ++k) {
     const MetricInfo& info = InfoOf(r.design.metrics[k]);
     o << "| " << info.name << " | " << info.unit << " | " << Num(r.noise.scale[k]) << " | "
       << Num(info.noise_exponent) << " | " << r.noise.method[k] << " (" << r.noise.pairs[k]
-      << ") | " << Num(r.dispersion[k]) << " | " << Num(r.baseline.mean_sq[k]) << " | "
-      << Num(r.baseline_heldout.mean_sq[k]) << " |\n";
+      << ") | " << Num(r.dispersion[k]) << " | " << Num(r.dispersion[kk + k]) << " | "
+      << Num(r.baseline.mean_sq[k]) << " | " << Num(r.baseline_heldout.mean_sq[k]) << " |\n";
   }
   o << "\nReplicates are the emitter on and off rows of one test point: the same panel "
     << "placement recorded twice, so the difference of their residuals is noise whatever the "

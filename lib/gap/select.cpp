@@ -69,27 +69,61 @@ std::vector<double> Dispersion(const GapModel& m, const std::vector<double>& mu,
     const double z = -8 + (i + 0.5) * 1e-3;
     expected += dev(z) * std::exp(-0.5 * z * z) / std::sqrt(2 * M_PI) * 1e-3;
   }
-  const std::vector<double> z = Scaled(m, mu);
-  std::vector<double> phi(k_count, 1.0);
-  for (int k = 0; k < k_count; ++k) {
-    std::vector<double> a;
-    for (size_t o = k; o < z.size(); o += k_count)
-      if (cells[o / k_count] && std::isfinite(z[o])) a.push_back(z[o]);
-    if (a.empty()) continue;
-    auto excess = [&](double log_phi) {
-      const double s = std::exp(-0.5 * log_phi);
-      double sum = 0;
-      for (double v : a) sum += dev(v * s);
-      return sum / static_cast<double>(a.size()) - expected;
-    };
-    if (excess(0) <= 0) continue;
+  // The log of the factor ≥ 0 at which `excess` (decreasing in it) reaches 0.
+  auto solve = [](const auto& excess) {
+    if (excess(0.0) <= 0) return 0.0;
     double lo = 0, hi = 1;
     while (excess(hi) > 0 && hi < 60) hi *= 2;
     for (int it = 0; it < 60; ++it) {
       const double mid = 0.5 * (lo + hi);
       (excess(mid) > 0 ? lo : hi) = mid;
     }
-    phi[k] = std::exp(0.5 * (lo + hi));
+    return 0.5 * (lo + hi);
+  };
+  std::vector<double> phi(2 * static_cast<size_t>(k_count), 1.0);
+  struct Obs { double r, sigma, tau; };
+  for (int k = 0; k < k_count; ++k) {
+    // Per independent unit (a test point, or a recording alone) its residuals, replicate noise
+    // and placement scatter.
+    std::map<long long, std::vector<Obs>> units;
+    for (size_t o = k; o < mu.size(); o += k_count)
+      if (cells[o / k_count] && m.valid(o) && std::isfinite(mu[o]))
+        units[m.Unit(o)].push_back({m.y(o) - mu[o], m.replicate_noise(o), m.placement(o)});
+    // Within a unit: each recording's departure from the unit's precision-weighted mean over its
+    // own standard deviation σ·√(1 − w/W), which the placement the recordings share does not
+    // enter (a recording alone: its residual over σ). Between: each unit's mean, of variance
+    // ψ·τ² + φ/W.
+    std::vector<double> within;
+    std::vector<Obs> means;  // r: the unit's mean, sigma: √(1/W), tau: its τ
+    for (const auto& [unit, rs] : units) {
+      if (unit < 0) {
+        for (const Obs& x : rs) within.push_back(x.r / x.sigma);
+        continue;
+      }
+      double sw = 0, swr = 0;
+      for (const Obs& x : rs) sw += 1 / (x.sigma * x.sigma), swr += x.r / (x.sigma * x.sigma);
+      const double mean = swr / sw;
+      for (const Obs& x : rs) {
+        const double share = 1 / (x.sigma * x.sigma) / sw;
+        if (share < 1 - 1e-9) within.push_back((x.r - mean) / (x.sigma * std::sqrt(1 - share)));
+      }
+      if (rs[0].tau > 0) means.push_back({mean, std::sqrt(1 / sw), rs[0].tau});
+    }
+    phi[k] = std::exp(solve([&](double lp) {
+      if (within.empty()) return -1.0;
+      const double sc = std::exp(-0.5 * lp);
+      double sum = 0;
+      for (double v : within) sum += dev(v * sc);
+      return sum / static_cast<double>(within.size()) - expected;
+    }));
+    phi[k_count + k] = std::exp(solve([&](double lp) {
+      if (means.empty()) return -1.0;
+      const double psi = std::exp(lp);
+      double sum = 0;
+      for (const Obs& x : means)
+        sum += dev(x.r / std::sqrt(psi * x.tau * x.tau + phi[k] * x.sigma * x.sigma));
+      return sum / static_cast<double>(means.size()) - expected;
+    }));
   }
   return phi;
 }

@@ -18,7 +18,7 @@ struct Selection {
   std::string message;
   ModelFit m0;                         // the calibrated base
   HeldOut m0_ho;
-  std::vector<double> dispersion;      // φ about the widest model
+  std::vector<double> dispersion;      // φ then ψ per metric, about the widest model
   std::vector<EffectResult> effects;   // every candidate alone, in the candidates' order
   std::vector<double> r2_sigma, r2_p;  // share of each signature along the calibration
   std::vector<Confounded> confounded, correlations;
@@ -42,7 +42,9 @@ GapStat Stat(const GapModel& model, const std::vector<double>& z, const std::vec
 // seven metrics at the floor and the seventh at 20, its best is 73 %). NaN when `before` has no
 // excess (≤ 1): there is no gap to shrink.
 double Shrink(const GapStat& before, const GapStat& after);
-// Each metric's dispersion φ ≥ 1 about a prediction, over the marked cells.
+// Each metric's dispersions about a prediction, over the marked cells: φ_k ≥ 1, how much wider
+// than the replicate noise the recordings of one test point spread about their mean, then ψ_k ≥ 1,
+// how much wider than the placement law (at φ_k) the test points' means spread (fit.h, (2)).
 std::vector<double> Dispersion(const GapModel& model, const std::vector<double>& mu,
                                const std::vector<char>& cells);
 

@@ -1490,6 +1490,60 @@ TEST(AlongCalibration, TwoKeptEffectsThatStandInForEachOtherAreNotBothDropped) {
   EXPECT_EQ(r.ambiguous[0].effects.back(), "temporal_drift");
 }
 
+// The two dispersions (Dispersion; fit.h, (2)). PlacedGrid's rows (τ(D) = 0.05 m + 2 % of D,
+// 5 mm between emitter twins), each preset of a test point read off by its own draw of 2 cm (a
+// departure the twins share, as a preset the simulator does not reproduce is): the recordings
+// spread about their test point's mean about 16 times the twins' variance, while the test points'
+// means spread as the placement law says. About a prediction that holds the table's law (an
+// offset of −0.3 px: 1.26 m far at 16 m), φ reads that spread and ψ about 1; about the base,
+// which lacks the law, ψ takes it and φ does not move. One dispersion for both components (the
+// rule before: every residual over √(σ² + τ²), one robust scale) reads about 1 here: the
+// recordings' spread is lost under the placement law, and the fits weighed it as replicate noise.
+// Where that one scale is wider than 1 (the article's median: 5.4), it widened the placement
+// law by as much, and an effect acting on the test points' means lost that share of its evidence.
+TEST(Dispersion, TheRecordingsOfATestPointAndTheTestPointsMeansEachHaveTheirOwn) {
+  std::mt19937 rng(71);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::map<std::string, double> preset_shift;
+  auto truth = [&](const records::PanelMetrics& r) {
+    const std::string key =
+        r.light + r.preset + std::to_string(r.distance_m) + std::to_string(r.angle_deg);
+    if (!preset_shift.count(key)) preset_shift[key] = 0.02 * unit(rng);
+    return OffsetLaw(-0.3, r.distance_m) + preset_shift[key];
+  };
+  Candidate offset = DefaultCandidates()[0];
+  offset.range_law = false;
+  const LimitTable t = MedianTable(PlacedGrid(17, truth), offset,
+                                   [](const std::vector<double>& v, double d) {
+                                     return OffsetLaw(v[0], d);
+                                   });
+  const std::vector<char> all(t.d.num_cells(), 1);
+  GapModel model(t.d, t.s, t.n, FitSettings(), &t.pe);
+  const int kk = model.num_metrics();
+  ModelFit law;
+  TermFit term;
+  term.term.candidate = 0;
+  term.values = {{-0.3}};
+  law.terms = {term};
+  const std::vector<double> at_law = Dispersion(model, model.Predict(law), all);
+  const std::vector<double> at_base = Dispersion(model, t.s.base, all);
+  ASSERT_EQ(at_law.size(), 2u * kk);
+  std::printf("median: about the law phi %.2f psi %.2f; about the base phi %.2f psi %.2f\n",
+              at_law[0], at_law[kk], at_base[0], at_base[kk]);
+  EXPECT_GT(at_law[0], 6.0);
+  EXPECT_LT(at_law[kk], 1.8);
+  EXPECT_GT(at_base[kk], 5.0);
+  EXPECT_NEAR(at_base[0], at_law[0], 0.05 * at_law[0]);
+  // The one scale of every residual over √(σ² + τ²) about the law, as it was read.
+  std::vector<double> z;
+  for (size_t o = 0; o < static_cast<size_t>(model.num_obs()); o += kk)
+    if (model.valid(o)) z.push_back((model.y(o) - model.Predict(law)[o]) / model.noise(o));
+  double mean_sq = 0;
+  for (double v : z) mean_sq += v * v / static_cast<double>(z.size());
+  std::printf("one scale: mean z^2 %.2f\n", mean_sq);
+  EXPECT_LT(mean_sq, 0.25 * at_law[0]);
+}
+
 // The keep rule's share (MovedShare): two metrics, three observations each (observation o is
 // metric o % 2). The change moves metric 0 only: its share is that metric's, whatever gap
 // metric 1 holds (read as a share of the whole, a gap of 100 there would take it from 0.75 to
