@@ -1493,14 +1493,15 @@ TEST(AlongCalibration, TwoKeptEffectsThatStandInForEachOtherAreNotBothDropped) {
 // The two dispersions (Dispersion; fit.h, (2)). PlacedGrid's rows (τ(D) = 0.05 m + 2 % of D,
 // 5 mm between emitter twins), each preset of a test point read off by its own draw of 2 cm (a
 // departure the twins share, as a preset the simulator does not reproduce is): the recordings
-// spread about their test point's mean about 16 times the twins' variance, while the test points'
-// means spread as the placement law says. About a prediction that holds the table's law (an
-// offset of −0.3 px: 1.26 m far at 16 m), φ reads that spread and ψ about 1; about the base,
-// which lacks the law, ψ takes it and φ does not move. One dispersion for both components (the
-// rule before: every residual over √(σ² + τ²), one robust scale) reads about 1 here: the
-// recordings' spread is lost under the placement law, and the fits weighed it as replicate noise.
-// Where that one scale is wider than 1 (the article's median: 5.4), it widened the placement
-// law by as much, and an effect acting on the test points' means lost that share of its evidence.
+// spread about their test point's mean several times the twins' variance, while the test
+// points' means spread as the placement law says. About a prediction that holds the table's law
+// (an offset of −0.3 px: 1.26 m far at 16 m), φ reads that spread (7.2) and ψ about 1; about the
+// base, which lacks the law, ψ takes it and φ does not move. One dispersion for both components
+// (the rule before: every residual over √(σ² + τ²), one robust scale) reads about 1 here: the
+// recordings' spread is lost under the placement law, and the fits weighed it as replicate
+// noise. Where that one scale is wider than 1 (the median's 5.4 on the article's rows with an
+// offset of −0.97 px injected), it widened the placement law by as much, and an effect acting on
+// the test points' means lost that share of its evidence.
 TEST(Dispersion, TheRecordingsOfATestPointAndTheTestPointsMeansEachHaveTheirOwn) {
   std::mt19937 rng(71);
   std::normal_distribution<double> unit(0.0, 1.0);
