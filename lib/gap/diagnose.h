@@ -30,8 +30,8 @@
 //     An effect confounded with the calibration is never selected: with an effect confounded
 //     with a selected one it is named as "one of {a, b}" with the size each would need.
 //  4. How far, nested: an outer hold-out (leave one distance out by default) wraps everything
-//     fitted (noise, placement, calibration, φ and ψ, scope, selection); each outer fold's selection
-//     predicts its held-out cells additively and is simulated there at its fitted values
+//     fitted (noise, placement, calibration, φ and ψ, scope, selection); each outer fold's
+//     selection predicts its held-out cells additively and is simulated there at its fitted values
 //     (shrink_heldout_nested_pct, shrink_simulated_pct: the headline). An effect selected on
 //     the whole table stays only if it is selected in at least half of the outer folds and
 //     the outer folds' selections gain on their held-out cells as simulated (as the fits
