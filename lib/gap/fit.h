@@ -5,14 +5,16 @@
 //
 // For an observation (cell c, compared metric k) with real value y and base simulation b:
 //   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)                   (1)
-//   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · diag(σ²) + ψ_k · τ_k(D_t)² · 11ᵀ                       (2)
+//   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · diag(σ²) + ψ_k · τ_k(D_t)² · l lᵀ                      (2)
 // Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
 // the term's group of the cell (one shared group, the cell's light or its scenario: Scope); n_s
 // the scenario's calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J
 // simulated at the base;
 // σ the replicate noise (noise.h), τ the placement scatter of the test point t the recordings
 // share (placement.h: one random effect per test point and metric, so the recordings of one
-// placement count as one piece of evidence, not four), and φ_k, ψ_k the metric's dispersions
+// placement count as one piece of evidence, not four), l its loadings (1 but for a spread, whose
+// recordings take the displacement by their own scenario's sensitivity: tau_cell), and φ_k,
+// ψ_k the metric's dispersions
 // (how much wider than the replicate noise the recordings of one test point spread about their
 // mean, and how much wider than the placement law the test points' means spread, each ≥ 1:
 // select.h, Dispersion); the residuals are whitened block by block

@@ -293,6 +293,8 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
   pe.tau.assign(kk, std::vector<double>(np, 0.0));
   pe.floor_of.assign(kk, -1);
   pe.sensitivity.assign(kk, {});
+  pe.tau_cell.assign(kk, {});
+  std::vector<std::vector<double>> cell_loading(kk);  // [k][cell], metrics with a floor
   const auto median = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
   if (median != d.metrics.end() && !sims.moved.empty() && sims.moved_rel > 0) {
     pe.floor_distance_m = pe.point_distance_m;
@@ -314,6 +316,33 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
           ++count;
         }
         pe.sensitivity[k].push_back(count > 0 ? sum / count : 0.0);
+      }
+      std::map<std::string, std::pair<double, int>> per_scenario;  // sum, count
+      auto group = [&](const sim::Cell& c) {
+        std::ostringstream key;
+        key << c.light << '|' << c.preset << '|' << c.distance_m;
+        return key.str();
+      };
+      for (int c = 0; c < d.num_cells(); ++c) {
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        const double e = sims.moved[o] - sims.base[o];
+        if (!train[c] || !std::isfinite(e)) continue;
+        auto& [sum, count] = per_scenario[group(d.cells[c])];
+        sum += e / (sims.moved_rel * d.cells[c].distance_m);
+        ++count;
+      }
+      // Each recording's loading: its scenario's sensitivity over its distance's (the mean of
+      // every scenario's), within [0.1, 10]; 1 where either is not read.
+      cell_loading[k].assign(d.num_cells(), 1.0);
+      for (int c = 0; c < d.num_cells(); ++c) {
+        const auto it = per_scenario.find(group(d.cells[c]));
+        const size_t i = static_cast<size_t>(
+            std::find(pe.floor_distance_m.begin(), pe.floor_distance_m.end(),
+                      d.cells[c].distance_m) - pe.floor_distance_m.begin());
+        const double mean = i < pe.sensitivity[k].size() ? std::fabs(pe.sensitivity[k][i]) : 0;
+        if (it != per_scenario.end() && mean > 1e-9)
+          cell_loading[k][c] =
+              std::clamp(std::fabs(it->second.first / it->second.second) / mean, 0.1, 10.0);
       }
     }
   }
@@ -494,6 +523,14 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       pe.tau[k][t] = flag[t] && std::isfinite(pe.departure[k][t])
                          ? std::max(law, std::fabs(pe.departure[k][t]))
                          : law;
+    }
+    if (!cell_loading[k].empty()) {
+      // A displaced panel moves recording i's spread by s_i·u_t, and its other departures that
+      // follow the panel's geometry go the same way: the test point's scatter is shared as
+      // τ_t·l_i, their covariance τ_t²·l_i·l_j.
+      pe.tau_cell[k].assign(d.num_cells(), 0.0);
+      for (int c = 0; c < d.num_cells(); ++c)
+        pe.tau_cell[k][c] = pe.tau[k][pe.point[c]] * cell_loading[k][c];
     }
   }
   return pe;

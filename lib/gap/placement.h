@@ -75,13 +75,20 @@ struct PlacementEstimate {
   std::vector<std::vector<double>> departure_z;  // [k][point] over its sd under the law
   std::vector<std::vector<char>> flagged;        // [k][point] beyond the law (Bonferroni)
   std::vector<std::vector<double>> tau;          // [k][point] scatter used in the covariance
+  // A spread's scatter per recording, where the floor is read per scenario: one displacement
+  // of the panel moves each preset's and light's spread by its own sensitivity (the simulator's
+  // daylight cells at 12 m: 0.16 per metre for HA, 0.03 for HD, where HD's plane_std nears the
+  // panel's in-plane spread), so the recordings of one test point share it with loadings that
+  // differ (Tau). [k][cell]; empty for a metric without a floor.
+  std::vector<std::vector<double>> tau_cell;
 
   // The law at distance D for compared metric k (metric: its Metric value), its floor included.
   double Law(int k, int metric, double distance_m) const;
   // The floor of compared metric k's scatter at distance D (0: none).
   double Floor(int k, double distance_m) const;
   double Tau(int k, int cell) const {
-    return tau.empty() ? 0.0 : tau[k][point[cell]];
+    if (tau.empty()) return 0.0;
+    return tau_cell[k].empty() ? tau[k][point[cell]] : tau_cell[k][cell];
   }
   bool empty() const { return tau.empty(); }
 };

@@ -92,12 +92,32 @@ std::vector<double> Dispersion(const GapModel& m, const std::vector<double>& mu,
     // Within a unit: each recording's departure from the unit's precision-weighted mean over its
     // own standard deviation σ·√(1 − w/W), which the placement the recordings share does not
     // enter (a recording alone: its residual over σ). Between: each unit's mean, of variance
-    // ψ·τ² + φ/W.
+    // ψ·τ² + φ/W. Where the recordings share the placement with loadings τ_i that differ (a
+    // spread's floor per scenario, PlacementEstimate::tau_cell), the same split about the
+    // shared displacement's estimate ξ = Σ(τ·r/σ²) / B, B = Σ τ²/σ²: departures r − τ·ξ over
+    // σ·√(1 − τ²/(σ²·B)), and ξ of variance ψ + φ/B.
     std::vector<double> within;
     std::vector<Obs> means;  // r: the unit's mean, sigma: √(1/W), tau: its τ
     for (const auto& [unit, rs] : units) {
       if (unit < 0) {
         for (const Obs& x : rs) within.push_back(x.r / x.sigma);
+        continue;
+      }
+      bool equal = true;
+      for (const Obs& x : rs) equal = equal && x.tau == rs[0].tau;
+      if (!equal) {
+        double b = 0, a = 0;
+        for (const Obs& x : rs) {
+          b += x.tau * x.tau / (x.sigma * x.sigma);
+          a += x.tau * x.r / (x.sigma * x.sigma);
+        }
+        const double xi = a / b;
+        for (const Obs& x : rs) {
+          const double lever = x.tau * x.tau / (x.sigma * x.sigma) / b;
+          if (lever < 1 - 1e-9)
+            within.push_back((x.r - x.tau * xi) / (x.sigma * std::sqrt(1 - lever)));
+        }
+        means.push_back({xi, std::sqrt(1 / b), 1.0});
         continue;
       }
       double sw = 0, swr = 0;

@@ -43,8 +43,9 @@ GapStat Stat(const GapModel& model, const std::vector<double>& z, const std::vec
 // excess (≤ 1): there is no gap to shrink.
 double Shrink(const GapStat& before, const GapStat& after);
 // Each metric's dispersions about a prediction, over the marked cells: φ_k ≥ 1, how much wider
-// than the replicate noise the recordings of one test point spread about their mean, then ψ_k ≥ 1,
-// how much wider than the placement law (at φ_k) the test points' means spread (fit.h, (2)).
+// than the replicate noise the recordings of one test point spread about their mean (about the
+// shared displacement's estimate where their loadings differ), then ψ_k ≥ 1, how much wider
+// than the placement law (at φ_k) the test points' means spread (fit.h, (2)).
 std::vector<double> Dispersion(const GapModel& model, const std::vector<double>& mu,
                                const std::vector<char>& cells);
 
