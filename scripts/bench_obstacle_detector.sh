@@ -90,7 +90,7 @@ pcl_in voxel > "$OUT/vox.yaml"
 pcl_in cluster > "$OUT/clu.yaml"
 pcl_in voxel cluster > "$OUT/both.yaml"
 for v in vox clu both; do
-  [ "$(grep -c 'use_pcl: true' "$OUT/$v.yaml")" -ge 1 ] ||
+  grep -q 'use_pcl: true' "$OUT/$v.yaml" ||
     { echo "bench_obstacle_detector: $v.yaml sets no use_pcl" >&2; exit 1; }
 done
 declare -A var_s
