@@ -764,7 +764,7 @@ TEST(Placement, ASpreadsScatterIsAtLeastWhatThePlacementLawDoesToIt) {
 // times HD's, their mean the test point's τ), and the dispersion about the base reads the
 // recordings' departures about the shared displacement at the replicate noise. With one
 // loading for every recording of a test point, the HA − HD contrast reads as replicate noise
-// many times the twins'.
+// many times the twins', and so it does with the presets' simulated sensitivities swapped.
 TEST(Placement, EachPresetsSpreadTakesThePanelsDisplacementByItsOwnSensitivity) {
   std::vector<records::PanelMetrics> rows = ArticleGrid();
   std::mt19937 rng(29);
@@ -823,6 +823,19 @@ TEST(Placement, EachPresetsSpreadTakesThePanelsDisplacementByItsOwnSensitivity) 
               loaded[plane], loaded[kk + plane], shared[plane], shared[kk + plane]);
   EXPECT_LT(loaded[plane], 1.6);
   EXPECT_GT(shared[plane], 5.0);
+  // The loadings come from the simulation, not from the table: a simulation whose presets
+  // respond the other way round (HA 0.4/D, HD 2/D) gives loadings the table does not follow,
+  // and the recordings' departures about the shared displacement read as noise again.
+  for (int c = 0; c < d.num_cells(); ++c)
+    s.moved[static_cast<size_t>(c) * kk + plane] =
+        s.base[static_cast<size_t>(c) * kk + plane] +
+        0.02 * d.cells[c].distance_m *
+            sensitivity(d.cells[c].preset == "HA" ? "HD" : "HA", d.cells[c].distance_m);
+  const PlacementEstimate swapped = EstimatePlacement(d, s, n, all, 0.05);
+  const GapModel wrong(d, s, n, FitSettings(), &swapped);
+  const std::vector<double> misloaded = Dispersion(wrong, s.base, all);
+  std::printf("log plane_std: phi %.2f with the presets' loadings swapped\n", misloaded[plane]);
+  EXPECT_GT(misloaded[plane], 5.0);
 }
 
 // The same units without a misplaced point, 20 seeds: the test at p < 0.05 / 16 flags a point in
