@@ -63,6 +63,8 @@ constexpr char kUsage[] =
     "  --min-moved-shrink P, --min-own-moved-shrink P\n"
     "                       or the same two shares of the gap in the metrics they move\n"
     "                       reach P % (20, 30)\n"
+    "  --joint-window       effects that move the panel's window through the measured\n"
+    "                       depth read it at their joint depth, not each at its own (off)\n"
     "  --case NAME          --cases: only this case (as named in the table's first column;\n"
     "                       repeatable; \"no effect\" for the 20 null tables)\n"
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
@@ -156,6 +158,7 @@ int main(int argc, char** argv) {
           throw BadInput("--inject-times: '" + list + "' is not a list of multiples in (0, 10]");
       }
       else if (a == "--case") only_cases.push_back(args.Value());
+      else if (a == "--joint-window") params.fit.joint_window = true;
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-own-shrink") params.min_own_shrink_pct = args.Number(false, 0, 99.9);
       else if (a == "--min-moved-shrink") params.min_moved_shrink_pct = args.Number(false, 0, 99.9);

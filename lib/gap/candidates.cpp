@@ -37,7 +37,7 @@ std::vector<Candidate> MakeCandidates() {
                            {-0.2, -0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12, 0.2}, 0,
                            0.02)}});
   c.push_back({"range_vs_depth", {Continuous("weight", {0, 0.15, 0.4, 0.7, 1.0}, 0, 0.5)}});
-  for (Candidate& law : c) law.range_law = true;  // the three above
+  for (Candidate& law : c) law.range_law = law.moves_window = true;  // the three above
   // Nodes at ±1 px: between 0.6 and 1.5 px the interpolation crossed a change of regime. The
   // residual brings the measured plane nearer off axis and tilts it; the panel's size laid on
   // it then takes in more than the panel (its panel share at 16 m, 35°, HA: 0.90 at 1 px, 0.80
@@ -59,6 +59,7 @@ std::vector<Candidate> MakeCandidates() {
                {Continuous("yaw_deg", {-40, -25, -14, -6, 0, 6, 14, 25, 40}, 0, 20)}});
   c.push_back({"temporal_drift",
                {Continuous("rate_px_per_s", {-1, -0.55, -0.25, 0, 0.25, 0.55, 1}, 0, 0.5)}});
+  c.back().moves_window = true;
   Axis width = Continuous("width_px", {1, 2, 3, 5, 8}, NAN, 3);
   width.discrete = true;
   c.push_back({"edge_mixing", {width, Continuous("strength", {0, 0.08, 0.18, 0.3, 0.65, 1.0}, 0, 0.5)}});

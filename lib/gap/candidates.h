@@ -37,6 +37,10 @@ struct Candidate {
   // A law of the range the camera reads (its signature is the median bias: an offset's ∝ Z², a
   // scale's ∝ Z, range read for depth growing off axis): smooth in distance, never a step.
   bool range_law = false;
+  // It moves the window through the measured depth, and beside another that does the window
+  // follows their joint depth (fit.h, 1a): a range law, and a disparity offset that drifts
+  // during the recording, whose pooled frames read the panel at its mean offset.
+  bool moves_window = false;
   bool IsValid(std::string* why) const;
 };
 

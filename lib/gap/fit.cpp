@@ -13,18 +13,6 @@
 namespace depthbias::gap {
 namespace {
 
-// Huber's loss as a residual: r̃ = r for |r| ≤ k, sign(r)·√(2k|r| − k²) beyond, so that
-// r̃² = 2ρ(r); dr̃/dr = 1 inside, k/|r̃| beyond.
-inline double Robust(double r, double k, double* d) {
-  if (k <= 0 || std::fabs(r) <= k) {
-    *d = 1;
-    return r;
-  }
-  const double rt = std::copysign(std::sqrt(2 * k * std::fabs(r) - k * k), r);
-  *d = k / std::fabs(rt);
-  return rt;
-}
-
 // simulations.cpp's Pchip in parts, with the same arithmetic and its slopes (PchipSlope): where
 // t falls among the nodes and its Hermite weights (a Stencil, the same for every curve on those
 // nodes), and a curve's value from them (Interpolate).
@@ -80,7 +68,7 @@ class GapCost : public ceres::CostFunction {
   GapCost(const GapModel& model, const std::vector<Term>& terms, const Layout& layout,
           GapModel::Whitening white, std::vector<std::vector<std::vector<double>>> fixed)
       : model_(model), terms_(terms), layout_(layout), white_(std::move(white)),
-        obs_(white_.obs), fixed_(std::move(fixed)) {
+        obs_(white_.obs), fixed_(std::move(fixed)), shares_(model.SharesWindow(terms)) {
     for (const auto& b : layout_.blocks)
       mutable_parameter_block_sizes()->push_back(b.term >= 0 ? static_cast<int>(b.axes.size())
                                                              : 2);
@@ -238,13 +226,16 @@ class GapCost : public ceres::CostFunction {
     // Raw residuals y − μ and their derivatives −∂μ/∂p.
     const std::vector<At> at = Coordinates(p);
     double v[2];
+    std::vector<const double*> ut(terms_.size());  // (1a)'s coordinates, term by term
     for (size_t i = 0; i < obs_.size(); ++i) {
       const size_t o = obs_[i];
       double mu = s.base[o];
       for (size_t t = 0; t < terms_.size(); ++t) {
         const At& a = at[stencil_offset_[t] + group_[t][i]];
         mu += Delta(a.st[0], t, a.u, i);
+        ut[t] = a.u;
       }
+      if (shares_) mu += model_.WindowInteraction(terms_, ut.data(), o);
       const int nb = scenario_block_[i];
       if (nb >= 0) mu += s.jac_log_sigma[o] * p[nb][0] + s.jac_logit_p[o] * p[nb][1];
       residuals[i] = model_.y(o) - mu;
@@ -262,7 +253,14 @@ class GapCost : public ceres::CostFunction {
           v[axes[j]] = a.u[axes[j]] + h;
           const double up = along ? Delta(a.st[1], t, v, i) : model_.Delta(terms_[t], v, o);
           v[axes[j]] = a.u[axes[j]] - h;
-          const double down = along ? Delta(a.st[2], t, v, i) : model_.Delta(terms_[t], v, o);
+          double down = along ? Delta(a.st[2], t, v, i) : model_.Delta(terms_[t], v, o);
+          if (shares_) {  // (1a) at the same steps: down − up of it
+            ut[t] = v;
+            down += model_.WindowInteraction(terms_, ut.data(), o);
+            v[axes[j]] = a.u[axes[j]] + h;
+            down -= model_.WindowInteraction(terms_, ut.data(), o);
+            ut[t] = a.u;
+          }
           jac[b][i * axes.size() + j] = -(up - down) / (2 * h);
         }
       }
@@ -318,36 +316,10 @@ class GapCost : public ceres::CostFunction {
   std::vector<std::array<double, 2>> step_; // [term][axis]: the Jacobian's step
   std::vector<int> scenario_block_;         // [position in obs_]: its calibration block or −1
   std::vector<std::vector<double>> calibration_;  // [block]: a calibration block's Jacobian
+  bool shares_;                             // the window's interaction (fit.h, 1a)
 };
 
 }  // namespace
-
-double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells,
-                              std::map<long long, double>* per_unit) const {
-  const int k_count = num_metrics();
-  std::vector<size_t> obs;
-  for (size_t o = 0; o < mu.size(); ++o)
-    if (valid(o) && cells[o / k_count] && std::isfinite(mu[o])) obs.push_back(o);
-  const Whitening w = Whiten(obs);
-  double sum = 0;
-  for (size_t b = 0; b + 1 < w.starts.size(); ++b) {
-    const int st = w.starts[b], n = w.starts[b + 1] - st;
-    double block = 0;
-    for (int r = 0; r < n; ++r) {
-      double e = 0;
-      for (int c = 0; c <= r; ++c) {
-        const size_t o = w.obs[st + c];
-        e += w.linv[b][r * n + c] * (y_[o] - mu[o]);
-      }
-      double d;
-      const double rr = Robust(e, settings_.huber_k, &d);
-      sum += rr * rr;
-      block += rr * rr;
-    }
-    if (per_unit) (*per_unit)[Unit(w.obs[st])] += block;
-  }
-  return sum;
-}
 
 ModelFit FitTerms(const GapModel& model, const std::vector<Term>& terms,
                   const std::vector<char>& train, const ModelFit* start) {

@@ -4,7 +4,7 @@
 // solved with Ceres.
 //
 // For an observation (cell c, compared metric k) with real value y and base simulation b:
-//   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)                   (1)
+//   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)  [+ (1a)]          (1)
 //   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · diag(σ²) + ψ_k · τ_k(D_t)² · l lᵀ                      (2)
 // Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
 // the term's group of the cell (one shared group, the cell's light or its scenario: Scope); n_s
@@ -42,6 +42,10 @@ struct FitSettings {
   double tau_log_sigma = 0.15;  // prior width of each scenario's Δ log σ_d
   double tau_logit_p = 0.3;     // prior width of each scenario's Δ logit p
   int max_iterations = 50;
+  // Effects that move the window through the measured depth read it at their joint depth (1a);
+  // false: each one's window departures add, as every other metric's (the default: docs/gap/
+  // cases.md, The window at the joint depth).
+  bool joint_window = false;
 
   bool IsValid(std::string* why) const;
 };
@@ -107,6 +111,18 @@ struct ModelFit {
   double Deviance() const { return data_deviance + prior; }
 };
 
+// Huber's loss as a residual: r̃ = r for |r| ≤ k, sign(r)·√(2k|r| − k²) beyond, so that
+// r̃² = 2ρ(r); dr̃/dr = 1 inside, k/|r̃| beyond.
+inline double Robust(double r, double k, double* d) {
+  if (k <= 0 || std::fabs(r) <= k) {
+    *d = 1;
+    return r;
+  }
+  const double rt = std::copysign(std::sqrt(2 * k * std::fabs(r) - k * k), r);
+  *d = k / std::fabs(rt);
+  return rt;
+}
+
 class GapModel {
  public:
   // The design, simulations, noise and placement must outlive the model; without a placement
@@ -164,6 +180,23 @@ class GapModel {
   }
   // The term's departure from the base at coordinates u (one per axis) for one observation.
   double Delta(const Term& term, const double* u, size_t obs) const;
+  // The window's one response to the measured depth (1a). A term that moves the window through
+  // the measured depth (Candidate::moves_window) carries in the metrics the window decides (its
+  // own, MetricInfo::window, and the valid share, which falls once the window outgrows the
+  // panel) the response to its own median departure M_t; where two or more such terms act, the
+  // window follows their sum M = Σ M_t, not each alone. With H the disparity offset's departure
+  // in that metric as a function of its median departure (its surface's nodes, the cell's own),
+  // the terms' departures take H(M) − Σ H(M_t) more: nothing for one term, and for an offset
+  // beside a drift, the drift's own part plus H at their joint depth. (Simulated at seed 1001,
+  // the valid share at 16 m: −0.004 points for an offset of 0.15 px alone, −0.006 for a drift of
+  // 0.6 px/s alone, −1.72 for both; −1.94 for an offset of 0.25 px, which reads as near.)
+  // Whether the terms take it: FitSettings::joint_window, two or more of them move the window,
+  // an offset surface and the median.
+  bool SharesWindow(const std::vector<Term>& terms) const;
+  // H(M) − Σ H(M_t) at observation obs, u[t] term t's coordinates at obs's group; 0 but in the
+  // metrics the window decides.
+  double WindowInteraction(const std::vector<Term>& terms, const double* const* u,
+                           size_t obs) const;
   // Prediction μ (1) of every observation under a fit (every cell, fitted or not).
   std::vector<double> Predict(const ModelFit& fit) const;
   // Σ 2ρ(r) over the valid observations of the cells marked in `cells`.
@@ -188,6 +221,11 @@ class GapModel {
   std::vector<int> absorbs_;                               // [candidate]
   std::vector<Surface> own_;  // the surfaces averaged over placement
   std::vector<int> own_of_;   // [candidate] its index in own_, −1: the simulations'
+  int median_k_ = -1;         // the median's position among the compared metrics
+  // [obs] of a metric the window decides: H's nodes, median departures ascending, and the
+  // metric's departures at them (WindowInteraction); empty without an offset surface.
+  std::vector<std::vector<double>> window_m_, window_h_;
+  double WindowResponse(size_t obs, double m) const;
 };
 
 // Fits the terms (with their discrete nodes fixed) and the calibration on the marked cells,

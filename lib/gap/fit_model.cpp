@@ -70,6 +70,65 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
     coords_.push_back(axes);
   }
   absorbs_.assign(sims.surfaces.size(), 0);
+  // H of (1a): the disparity offset's nodes, per window observation, by median departure.
+  int offset = -1;
+  for (size_t i = 0; i < sims.surfaces.size(); ++i)
+    if (sims.surfaces[i].candidate.effect == "disparity_offset" &&
+        sims.surfaces[i].candidate.axes.size() == 1)
+      offset = static_cast<int>(i);
+  if (!settings.joint_window || kmed == design.metrics.end() || offset < 0) return;
+  median_k_ = static_cast<int>(kmed - design.metrics.begin());
+  window_m_.assign(n, {});
+  window_h_.assign(n, {});
+  const Surface& off = surface(offset);
+  for (size_t o = 0; o < n; ++o) {
+    const size_t om = o - o % k_count + median_k_;
+    // The window's metrics, and the valid share: a window grown past the panel takes in what
+    // gives no depth beside it (its nodes are kept as simulated: smooth.h).
+    const int metric = design.metrics[o % k_count];
+    if (!InfoOf(metric).window && metric != kValidPct) continue;
+    std::vector<std::pair<double, double>> nodes;
+    for (int j = 0; j < off.num_nodes; ++j) {
+      const double m = off.table[om * off.num_nodes + j] - sims.base[om];
+      const double h = off.table[o * off.num_nodes + j] - sims.base[o];
+      if (std::isfinite(m) && std::isfinite(h)) nodes.push_back({m, h});
+    }
+    std::sort(nodes.begin(), nodes.end());
+    for (const auto& [m, h] : nodes) {  // median departures equal: their mean
+      if (!window_m_[o].empty() && m <= window_m_[o].back()) {
+        window_h_[o].back() = 0.5 * (window_h_[o].back() + h);
+        continue;
+      }
+      window_m_[o].push_back(m);
+      window_h_[o].push_back(h);
+    }
+    if (window_m_[o].size() < 2) window_m_[o].clear(), window_h_[o].clear();
+  }
+}
+
+bool GapModel::SharesWindow(const std::vector<Term>& terms) const {
+  int moving = 0;
+  for (const Term& t : terms) moving += surface(t.candidate).candidate.moves_window;
+  return settings_.joint_window && moving >= 2 && !window_m_.empty();
+}
+
+double GapModel::WindowResponse(size_t obs, double m) const {
+  const auto& x = window_m_[obs];
+  return Pchip(x.data(), window_h_[obs].data(), static_cast<int>(x.size()), m);
+}
+
+double GapModel::WindowInteraction(const std::vector<Term>& terms, const double* const* u,
+                                   size_t obs) const {
+  if (window_m_.empty() || window_m_[obs].empty()) return 0.0;
+  const size_t om = obs - obs % num_metrics() + median_k_;
+  double total = 0, parts = 0;
+  for (size_t t = 0; t < terms.size(); ++t) {
+    if (!surface(terms[t].candidate).candidate.moves_window) continue;
+    const double m = Delta(terms[t], u[t], om);
+    total += m;
+    parts += WindowResponse(obs, m);
+  }
+  return WindowResponse(obs, total) - parts;
 }
 
 int GapModel::Frozen(const std::vector<Term>& terms) const {
@@ -94,6 +153,33 @@ double GapModel::weight(size_t obs) const {
   const size_t k = obs % num_metrics();
   const double s = sigma_[obs], t = placement(obs);
   return 1.0 / std::sqrt(phi_[k] * s * s + phi_[num_metrics() + k] * t * t);
+}
+
+double GapModel::DataDeviance(const std::vector<double>& mu, const std::vector<char>& cells,
+                              std::map<long long, double>* per_unit) const {
+  const int k_count = num_metrics();
+  std::vector<size_t> obs;
+  for (size_t o = 0; o < mu.size(); ++o)
+    if (valid(o) && cells[o / k_count] && std::isfinite(mu[o])) obs.push_back(o);
+  const Whitening w = Whiten(obs);
+  double sum = 0;
+  for (size_t b = 0; b + 1 < w.starts.size(); ++b) {
+    const int st = w.starts[b], n = w.starts[b + 1] - st;
+    double block = 0;
+    for (int r = 0; r < n; ++r) {
+      double e = 0;
+      for (int c = 0; c <= r; ++c) {
+        const size_t o = w.obs[st + c];
+        e += w.linv[b][r * n + c] * (y_[o] - mu[o]);
+      }
+      double d;
+      const double rr = Robust(e, settings_.huber_k, &d);
+      sum += rr * rr;
+      block += rr * rr;
+    }
+    if (per_unit) (*per_unit)[Unit(w.obs[st])] += block;
+  }
+  return sum;
 }
 
 GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
@@ -213,15 +299,21 @@ double GapModel::Delta(const Term& term, const double* u, size_t obs) const {
 std::vector<double> GapModel::Predict(const ModelFit& fit) const {
   const int k_count = num_metrics();
   std::vector<double> mu(sims_.base);
-  double u[2];
+  std::vector<Term> terms;
+  for (const TermFit& t : fit.terms) terms.push_back(t.term);
+  const bool shares = SharesWindow(terms);
+  std::vector<std::array<double, 2>> u(terms.size());
+  std::vector<const double*> at(terms.size());
   for (size_t o = 0; o < mu.size(); ++o) {
     const int cell = static_cast<int>(o / k_count);
-    for (const TermFit& t : fit.terms) {
-      const auto& values = t.values[Group(t.term, cell)];
+    for (size_t i = 0; i < terms.size(); ++i) {
+      const auto& values = fit.terms[i].values[Group(terms[i], cell)];
       for (size_t a = 0; a < values.size(); ++a)
-        u[a] = ToCoord(t.term.candidate, static_cast<int>(a), values[a]);
-      mu[o] += Delta(t.term, u, o);
+        u[i][a] = ToCoord(terms[i].candidate, static_cast<int>(a), values[a]);
+      at[i] = u[i].data();
+      mu[o] += Delta(terms[i], u[i].data(), o);
     }
+    if (shares) mu[o] += WindowInteraction(terms, at.data(), o);
     if (!fit.nuisance.empty()) {
       const auto& n = fit.nuisance[design_.scenario[cell]];
       mu[o] += sims_.jac_log_sigma[o] * n[0] + sims_.jac_logit_p[o] * n[1];

@@ -246,8 +246,8 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
   w.Integer("seed", static_cast<long long>(ctx.seed)).Integer("frames", p.simulate.frames);
   w.String("holdout", r.holdout).Integer("folds", r.folds);
   w.Number("huber_k", p.fit.huber_k).Number("tau_log_sigma", p.fit.tau_log_sigma);
-  w.Number("tau_logit_p", p.fit.tau_logit_p).Number("confounded_r", p.confounded_r);
-  w.Number("absorb_r", p.absorb_r).Number("alpha", p.alpha);
+  w.Number("tau_logit_p", p.fit.tau_logit_p).Bool("joint_window", p.fit.joint_window);
+  w.Number("confounded_r", p.confounded_r).Number("absorb_r", p.absorb_r).Number("alpha", p.alpha);
   w.Number("min_effect_shrink_pct", p.min_effect_shrink_pct);
   w.Number("min_own_shrink_pct", p.min_own_shrink_pct);
   w.Number("min_moved_shrink_pct", p.min_moved_shrink_pct);

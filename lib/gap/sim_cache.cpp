@@ -121,7 +121,8 @@ std::string SimulationsKey(const std::string& origin, const sim::SimParams& base
       << Exact(c.angle_deg) << " deg | " << c.preset << " | emitter " << c.emitter_on << " | "
       << c.light << "\n";
   for (const Candidate& c : candidates) {
-    k << "candidate " << c.effect << " range_law " << c.range_law << "\n";
+    k << "candidate " << c.effect << " range_law " << c.range_law << " moves_window "
+      << c.moves_window << "\n";
     for (const Axis& a : c.axes) {
       k << "  axis " << a.param << " nodes";
       for (double v : a.nodes) k << " " << Exact(v);

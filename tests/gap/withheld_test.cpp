@@ -580,11 +580,13 @@ std::vector<std::vector<double>> ExpectGroupIntervalsOverFolds(
 
 // One case of the suite at seed S, run as scripts/gap_cases.sh runs it (its table at S + 999 +
 // its index, the diagnosis at S); empty if no case has that name.
-std::vector<CaseOutcome> OneCase(const std::string& name, std::uint64_t seed) {
+std::vector<CaseOutcome> OneCase(const std::string& name, std::uint64_t seed,
+                                 bool joint_window = false) {
   sim::SimParams at = Base();
   at.seed = seed;
   DiagnoseParams params;
   params.simulate.threads = 2;
+  params.fit.joint_window = joint_window;
   const std::vector<WithheldCase> cases = DefaultWithheldCases();
   std::vector<int> only;
   for (size_t i = 0; i < cases.size(); ++i)
@@ -718,6 +720,24 @@ TEST(Cases, AnOffsetBesideADriftNamedWithTheCalibrationIsAlsoReadWithIt) {
   EXPECT_GT(alone, 0.2);
   EXPECT_LT(with, alone - 0.01) << "the drift's median shift stays in the offset";
   EXPECT_GT(with, 0.1);
+}
+
+// The same table with the window read at the joint depth of the effects that move it
+// (--joint-window; fit.h, 1a): the offset read beside the drift is its size within 20 %
+// (0.129 px for 0.15). The valid share falls by 1–2 points at 8–16 m, where the offset or the
+// drift alone moves it by less than 0.3: with each term's window read alone the offset took
+// that fall and read 0.21 px.
+TEST(Cases, WithTheJointWindowAnOffsetBesideADriftIsItsSize) {
+  const std::vector<CaseOutcome> out = OneCase("disparity_offset + temporal_drift", 1, true);
+  ASSERT_EQ(out.size(), 1u);
+  ASSERT_EQ(out[0].selected, std::vector<std::string>{"disparity_offset"}) << out[0].why;
+  const std::string& j = out[0].gap_json;
+  EXPECT_NE(j.find("\"joint_window\": true"), std::string::npos);
+  const double with =
+      NumberAfter(j, {"\"ambiguous\": [", "\"temporal_drift\",", "\"calibration:sigma_d\"",
+                      "\"selection_with\": {", "\"disparity_offset\": {", "\"delta_px\": "});
+  EXPECT_NEAR(with, 0.15, 0.2 * 0.15);
+  EXPECT_TRUE(out[0].pass) << out[0].why;
 }
 
 // A table read as diagnose_gap reads it (its rows screened by the sensor's design rules) and
