@@ -94,13 +94,14 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
       if (std::isfinite(m) && std::isfinite(h)) nodes.push_back({m, h});
     }
     std::sort(nodes.begin(), nodes.end());
-    for (const auto& [m, h] : nodes) {  // median departures equal: their mean
-      if (!window_m_[o].empty() && m <= window_m_[o].back()) {
-        window_h_[o].back() = 0.5 * (window_h_[o].back() + h);
-        continue;
-      }
-      window_m_[o].push_back(m);
-      window_h_[o].push_back(h);
+    for (size_t j = 0; j < nodes.size();) {  // nodes of one median departure: their mean
+      size_t end = j;
+      double sum = 0;
+      for (; end < nodes.size() && nodes[end].first == nodes[j].first; ++end)
+        sum += nodes[end].second;
+      window_m_[o].push_back(nodes[j].first);
+      window_h_[o].push_back(sum / static_cast<double>(end - j));
+      j = end;
     }
     if (window_m_[o].size() < 2) window_m_[o].clear(), window_h_[o].clear();
   }
