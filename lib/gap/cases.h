@@ -100,18 +100,18 @@ std::string RealInjectionCaseName(const std::string& label, const std::string& e
 const std::vector<std::string>& RealInjectionEffects();
 // Whether a case name is one RealInjectionCases gives (any multiple).
 bool IsRealInjectionCase(const std::string& name);
-// The real rows with the case's effects applied by their physics, every row alike (or those of
-// one light): a disparity offset δ reads each depth as Z' = f·B / (f·B / Z + δ) (fb = f·B in
-// px·m): the median maps to Z', the mean's departure from it and the spreads by dZ'/dZ =
-// (Z'/Z)², the range by Z'/Z, the tilt's tangent by Z'/Z (an inverse-depth plane moved by
-// δ/(f·B)); valid_pct and disparity-unit columns stay. A depth scale s reads every depth and
-// the range 1 + s times and leaves the tilt. The panel's extent (width, height), measured in
-// panel_extract's window of the panel's known size on the measured plane: read far it stays,
-// read near it shrinks with the panel's image, by Z'/Z (or 1 + s), the bound (MapRow). plane_std
-// grows no further than a uniform spread over the panel's shorter side, s/√12, where the plane
-// fit's smallest axis turns into the panel's plane (the row's measured extent, else
-// `panel_side_m`). Throws std::invalid_argument for another effect, or an offset that sends a
-// depth beyond infinity.
+// The real rows with the case's effects applied by their physics, every row alike (or those of one
+// light): a disparity offset δ reads each depth as Z' = f·B / (f·B / Z + δ) (fb = f·B in px·m): the
+// median maps to Z', the mean's departure from it and the spreads by dZ'/dZ = (Z'/Z)², the range by
+// Z'/Z, the tilt's tangent (the plane fit's error on a panel facing the camera) by (Z'/Z)³ read far
+// and Z'/Z read near; valid_pct and disparity-unit columns stay. A depth scale s reads every depth
+// and the range 1 + s times, the tilt's tangent (1 + s)² times read far and as it was read near
+// (cases_real.cpp, TiltFactor). The panel's extent (width, height), measured in panel_extract's
+// window of the panel's known size on the measured plane: read far it stays, read near it shrinks
+// with the panel's image, by Z'/Z (or 1 + s), the bound (MapRow). plane_std grows no further than a
+// uniform spread over the panel's shorter side, s/√12, where the plane fit's smallest axis turns
+// into the panel's plane (the row's measured extent, else `panel_side_m`). Throws
+// std::invalid_argument for another effect, or an offset that sends a depth beyond infinity.
 std::vector<records::PanelMetrics> InjectIntoRealTable(
     const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb,
     double panel_side_m);

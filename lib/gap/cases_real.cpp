@@ -13,20 +13,20 @@
 namespace depthbias::gap {
 namespace {
 
-// Every depth and range of a row read `length` times as long, the spreads and the mean's
-// departure from the median `spread` times (the slope of the map at the median), the tilt's
-// tangent `tilt` times. The panel's width and height are the extent, on the fitted plane, of the
+// Every depth and range of a row read `length` times as long, the spreads and the mean's departure
+// from the median `spread` times (the slope of the map at the median), the tilt's tangent `tilt`
+// times (TiltFactor). The panel's width and height are the extent, on the fitted plane, of the
 // region's sampled pixels, the region drawn from panel_extract's window: the panel's known size
 // laid on the measured plane (panel/panel_fit.h). Read far, that window lies within the panel's
-// image and measures the known size as before: the field campaign's bags, with a −0.25 px
-// offset (about 1 m far at 16 m), measure 1.008 m wide on average at 16 m through panel_extract
+// image and measures the known size as before: the field campaign's bags, with a −0.25 px offset
+// (about 1 m far at 16 m), measure 1.008 m wide on average at 16 m through panel_extract
 // (0.986–1.026 m, tests/data/field_unit_seed11.csv), the simulator's unit with the same offset
-// 1.0006 m, where a length's map gives 1.06–1.07 m. Read near, the window takes in the
-// background beyond the panel's outline, which the region's decision leaves out: the width is
-// the panel's image on the nearer plane, narrower by `length` at most. The map applies that
-// bound (the simulator's +0.35 px offset, 7.9 % near at 16 m, measured 4.8 % narrower); the
-// cases inject on the far side only. A table measured in a fixed box (panel_extract --box)
-// would follow `length` on both sides.
+// 1.0006 m, where a length's map gives 1.06–1.07 m. Read near, the window takes in the background
+// beyond the panel's outline, which the region's decision leaves out: the width is the panel's
+// image on the nearer plane, narrower by `length` at most. The map applies that bound (the
+// simulator's +0.35 px offset, 7.9 % near at 16 m, measured 4.8 % narrower); the cases inject on
+// the far side only. A table measured in a fixed box (panel_extract --box) would follow `length` on
+// both sides.
 // plane_std is the root of the smallest eigenvalue of the region's samples' scatter
 // (metrics::FitPlane): once the spread along the normal reaches the in-plane spread of the
 // panel's extent (uniform over a side s: s/√12, 0.289 m for 1 m), the smallest axis lies in the
@@ -47,6 +47,24 @@ void MapRow(double length, double spread, double tilt, double side_m, records::P
   m->range_m *= length;
   if (std::isfinite(m->normal_tilt_deg))
     m->normal_tilt_deg = std::atan(std::tan(m->normal_tilt_deg * M_PI / 180) * tilt) * 180 / M_PI;
+}
+
+// The factor on the tilt's tangent of a row whose depths are read `length` times as long with
+// the spread along the panel's normal `spread` times. The protocols' panels face the camera, so
+// a row's normal_tilt_deg is the plane fit's error, σ along the normal over the panel's extent
+// L and √N of its pixels: (spread σ) / (L' √N'). Read far, panel_extract's window of the
+// panel's known size on the measured plane keeps L and holds N / length² of the pixels: the
+// tangent grows by spread · length (a disparity offset's r²·r = r³, a depth scale's s·s = s²).
+// Read near, the window takes in the background, which the region's decision leaves out: N
+// stays and the extent measured on the nearer plane is L · length, so spread / length (r, and
+// 1 for a scale). Measured on the simulator (simulate --metrics-only, seeds 1–3, 48 cells a
+// distance and preset): an offset of −0.5 px (1.03–1.14 times as far) grew the tilt's RMS with
+// exponents 2.3–4.4 of the depths' ratio (3.2 on average), a depth scale of +10 % with 1.5–2.9
+// (2.1); the map before this one took Z'/Z and 1, which a far-reading offset's simulation
+// outgrew at 16 m. A panel turned from the camera has a geometric part, which an offset moves
+// by Z'/Z: not a tilt these protocols have.
+double TiltFactor(double length, double spread) {
+  return length >= 1 ? spread * length : spread / length;
 }
 
 constexpr const char* kTimesLimit = " × its limit)";
@@ -127,7 +145,8 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
       if (!in.only_light.empty() && m.light != in.only_light) continue;
       if (!(m.median_m > 0)) continue;  // nothing measured: the row stays as it was
       if (!offset) {
-        MapRow(1.0 + p->second, 1.0 + p->second, 1.0, panel_side_m, &m);
+        const double scale = 1.0 + p->second;
+        MapRow(scale, scale, TiltFactor(scale, scale), panel_side_m, &m);
         continue;
       }
       const double d = fb / m.median_m + p->second;
@@ -135,7 +154,7 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
         throw std::invalid_argument(c.name + ": an offset of " + std::to_string(p->second) +
                                     " px sends " + m.bag + " beyond infinity");
       const double r = fb / d / m.median_m;
-      MapRow(r, r * r, r, panel_side_m, &m);
+      MapRow(r, r * r, TiltFactor(r, r * r), panel_side_m, &m);
     }
   }
   return rows;

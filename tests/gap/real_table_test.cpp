@@ -53,8 +53,10 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   // Read far, the window is the panel's known size on the plane: the extent stays.
   EXPECT_EQ(rows[0].panel_width_m, 1.02);
   EXPECT_EQ(rows[0].panel_height_m, 0.98);
-  EXPECT_NEAR(std::tan(rows[0].normal_tilt_deg * M_PI / 180), std::tan(20 * M_PI / 180) * r,
-              1e-9);
+  // The tilt is the plane fit's error: σ along the normal (r²) over √N of a window holding
+  // N / r² of the pixels (r).
+  EXPECT_NEAR(std::tan(rows[0].normal_tilt_deg * M_PI / 180),
+              std::tan(20 * M_PI / 180) * r * r * r, 1e-9);
   EXPECT_EQ(rows[0].valid_pct, 40);
   EXPECT_EQ(rows[0].distance_m, 16) << "the nominal distance is the campaign's";
   EXPECT_EQ(rows[1].median_m, 16) << "the other light is left alone";
@@ -63,7 +65,8 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   EXPECT_NEAR(scaled[0].median_m, 17.6, 1e-9);
   EXPECT_NEAR(scaled[0].mean_m, 17.71, 1e-9);
   EXPECT_NEAR(scaled[0].plane_std_m, 0.11, 1e-12);
-  EXPECT_NEAR(scaled[0].normal_tilt_deg, 20, 1e-9);
+  EXPECT_NEAR(std::tan(scaled[0].normal_tilt_deg * M_PI / 180),
+              std::tan(20 * M_PI / 180) * 1.1 * 1.1, 1e-9);
   EXPECT_EQ(scaled[0].panel_width_m, 1.02);
   EXPECT_EQ(scaled[0].panel_height_m, 0.98);
   // Read near, the window takes in the background and the region keeps the panel's image: its
@@ -72,9 +75,14 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   const auto nearer = InjectIntoRealTable({m}, c, 60, 1.0);
   EXPECT_NEAR(nearer[0].panel_width_m, 1.02 * 0.9, 1e-12);
   EXPECT_NEAR(nearer[0].panel_height_m, 0.98 * 0.9, 1e-12);
+  // and the tilt's N stays: σ·s over an extent L·s, as it was.
+  EXPECT_NEAR(nearer[0].normal_tilt_deg, 20, 1e-9);
   c.injected = {{"disparity_offset", {{"delta_px", 0.5}}, ""}};
   const double near = 60 / (60 / 16.0 + 0.5) / 16;  // 14.1 m of 16
-  EXPECT_NEAR(InjectIntoRealTable({m}, c, 60, 1.0)[0].panel_width_m, 1.02 * near, 1e-12);
+  const records::PanelMetrics near_row = InjectIntoRealTable({m}, c, 60, 1.0)[0];
+  EXPECT_NEAR(near_row.panel_width_m, 1.02 * near, 1e-12);
+  EXPECT_NEAR(std::tan(near_row.normal_tilt_deg * M_PI / 180),
+              std::tan(20 * M_PI / 180) * near, 1e-9);  // σ·r² over an extent L·r
   c.injected = {{"disparity_offset", {{"delta_px", -4}}, ""}};  // 3.75 px at 16 m
   EXPECT_THROW(InjectIntoRealTable({m}, c, 60, 1.0), std::invalid_argument);
   c.injected = {{"panel_tilt", {{"yaw_deg", 10}}, ""}};
