@@ -4,9 +4,11 @@
 // any table (the judge's reading against the table as it was: withheld_test.cpp, Criteria).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -16,6 +18,8 @@
 #include "gap/design.h"
 #include "gap/diagnose.h"
 #include "io/metrics_csv.h"
+#include "sim/effects.h"
+#include "sim/sim_metrics.h"
 #include "support/article.h"
 
 namespace depthbias::gap {
@@ -139,6 +143,86 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
                            "t + disparity_offset (11 × its limit)", "(2 × its limit)"})
     EXPECT_FALSE(IsRealInjectionCase(name)) << name;
   EXPECT_THROW(RealInjectionCases(limits, "t", {0}), std::invalid_argument);
+}
+
+// The map against the physics it stands for: the simulator's own table without effect, mapped by
+// InjectIntoRealTable, and the simulator's table of the same effect (the renderer's disparities
+// moved, every pixel quantized and the panel's window laid on the measured plane anew) agree
+// within the tables' noise. Two seeds (5 and 6, 256 recordings of the article's protocol, 10
+// frames), pooled per distance over the presets and seeds. The tilt, a panel facing the camera's
+// plane-fit error, is compared by its RMS tangent, about 6 % of noise over 128 recordings (tan²
+// of a normal's error in two directions scatters as its mean): 0.89 at 16 m under both
+// effects, 0.97-1.04 nearer. Its map by Z'/Z (the plane's turn it used to take) gives 0.68 at
+// 16 m under the offset, and 1 under the scale 0.73. mean - median is left out: the region's
+// decision trims the tail of a far, noisy panel, and the map's (Z'/Z)^2 reads it about twice
+// the simulator's at 16 m HD (docs/gap/cases.md, The tilt of an injected real row).
+TEST(RealTable, AnInjectionOfTheSimulatorsTableIsItsSimulationOfTheEffect) {
+  const sim::SimParams base = Base();
+  const double fb = base.sensor.focal_px() * base.sensor.baseline_m;
+  sim::MetricsParams mp;
+  mp.frames = 10;
+  mp.threads = 2;
+  // plane_std's ceiling: a uniform spread over the panel's side, 1 m / √12 (MapRow). Near it
+  // the simulator's spread stops short of it (0.26-0.28 m at 16 m 0°, less at wider angles),
+  // where the map still lets it grow: the rows of the simulator's daylight HA and every HD at
+  // 16 m read 3-5 % more mapped than simulated. The comparison keeps the spreads below half of
+  // it, where the map reads 0.999-1.007 of the simulation but 1.023 at 16 m under the offset
+  // (the region's decision, which leaves out pixels far off the plane, trims a far panel's
+  // spread): within 3 %.
+  constexpr double kUnsaturated = 0.5 / std::sqrt(12.0);
+  const std::vector<std::pair<std::string, double>> effects{{"disparity_offset", -0.5},
+                                                            {"depth_scale", 0.1}};
+  for (const auto& [effect, size] : effects) {
+    SCOPED_TRACE(effect);
+    // [distance] sums over both seeds: tan² of the tilt (mapped, simulated), plane_std where it
+    // is below half its ceiling (mapped, simulated), temporal_std, the median, and the count.
+    std::map<double, std::array<double, 9>> sums;
+    for (std::uint64_t seed : {5u, 6u}) {
+      sim::SimParams p = base, q = base;
+      p.seed = q.seed = seed;
+      std::string why;
+      const std::string param = effect == "depth_scale" ? "scale_rel" : "delta_px";
+      ASSERT_TRUE(sim::BuildDepartures({{effect, {{param, size}}}}, &q.departures, &why)) << why;
+      std::vector<records::PanelMetrics> plain, moved;
+      for (const auto& r : sim::SimulateProtocolMetrics(p, mp)) plain.push_back(r.metrics);
+      for (const auto& r : sim::SimulateProtocolMetrics(q, mp)) moved.push_back(r.metrics);
+      WithheldCase c;
+      c.name = effect;
+      c.injected = {{effect, {{param, size}}, ""}};
+      const auto mapped = InjectIntoRealTable(plain, c, fb, 1.0);
+      ASSERT_EQ(mapped.size(), moved.size());
+      for (size_t i = 0; i < moved.size(); ++i) {
+        const records::PanelMetrics &a = mapped[i], &b = moved[i];
+        ASSERT_EQ(a.bag, b.bag);
+        auto tan2 = [](double deg) { return std::pow(std::tan(deg * M_PI / 180), 2); };
+        std::array<double, 9>& t = sums[a.distance_m];
+        t[0] += tan2(a.normal_tilt_deg);
+        t[1] += tan2(b.normal_tilt_deg);
+        if (b.plane_std_m < kUnsaturated && plain[i].plane_std_m < kUnsaturated) {
+          t[2] += a.plane_std_m;
+          t[3] += b.plane_std_m;
+        }
+        t[4] += a.temporal_std_m;
+        t[5] += b.temporal_std_m;
+        t[6] += a.median_m;
+        t[7] += b.median_m;
+        t[8] += 1;
+      }
+    }
+    for (const auto& [distance, t] : sums) {
+      SCOPED_TRACE("distance " + std::to_string(distance));
+      const double tilt = std::sqrt(t[0] / t[1]);
+      std::printf("%s %g m: RMS tilt %.3f, plane_std %.4f, temporal_std %.4f, median %.5f\n",
+                  effect.c_str(), distance, tilt, t[2] / t[3], t[4] / t[5], t[6] / t[7]);
+      EXPECT_GT(tilt, 0.85);
+      EXPECT_LT(tilt, 1.18);
+      if (t[3] > 0) {
+        EXPECT_NEAR(t[2] / t[3], 1, 0.03);
+      }
+      EXPECT_NEAR(t[4] / t[5], 1, 0.03);
+      EXPECT_NEAR(t[6] / t[7], 1, 0.005);
+    }
+  }
 }
 
 // The article's 128 real rows with a disparity offset injected by its physics (lib/gap/cases.h,
