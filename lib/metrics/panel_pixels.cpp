@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include <Eigen/Cholesky>
@@ -48,11 +49,38 @@ struct InverseDepthSums {
   }
 };
 
+// Fewer observed interior pixels than this: the first plane and the noise read every pixel.
+constexpr std::size_t kMinInteriorPixels = 12;
+
 // 1.4826 × the median of r (|disparity residual|·√n of the used pixels, reordered): σ_d of
 // one sample.
 double ScatterPx(std::vector<double>& r) {
   if (r.empty()) return 0.0;
   return 1.4826 * common::NthSmallest(r, r.size() / 2);
+}
+
+// The region's interior: its pixels at least a quarter of the bounding box's width (height) in
+// from its left and right (top and bottom) sides, the central half of the panel's image each way.
+std::vector<std::uint8_t> Interior(const PanelRegion& region) {
+  std::vector<std::uint8_t> inner(region.pixels.size(), 0);
+  if (region.width <= 0 || region.pixels.empty()) return inner;
+  int u0 = region.u_min, u1 = region.u_max, v0 = region.v_min, v1 = region.v_max;
+  if (u1 < u0 || v1 < v0) {  // no bounding box given: the pixels'
+    u0 = v0 = std::numeric_limits<int>::max();
+    u1 = v1 = std::numeric_limits<int>::min();
+    for (std::uint32_t idx : region.pixels) {
+      const int u = static_cast<int>(idx % static_cast<std::uint32_t>(region.width));
+      const int v = static_cast<int>(idx / static_cast<std::uint32_t>(region.width));
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+  }
+  const double qu = (u1 - u0 + 1) / 4.0, qv = (v1 - v0 + 1) / 4.0;
+  for (std::size_t k = 0; k < region.pixels.size(); ++k) {
+    const int u = static_cast<int>(region.pixels[k] % static_cast<std::uint32_t>(region.width));
+    const int v = static_cast<int>(region.pixels[k] / static_cast<std::uint32_t>(region.width));
+    inner[k] = u - u0 >= qu && u1 - u >= qu && v - v0 >= qv && v1 - v >= qv;
+  }
+  return inner;
 }
 
 }  // namespace
@@ -118,17 +146,18 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
   const std::size_t n = region.pixels.size();
   const double fb = in.fx * p.baseline_m;
   // Each observed pixel's ray, mean depth and samples, and what does not change from one plane
-  // to the next: the ground, √n, 1/√n, n/Z, f·B/Z. The first plane: every observed pixel, each
-  // counted once (a textured background seen past the panel's edge gives many samples a pixel
-  // where a hole-ridden panel gives few: weighted by its samples, a strip of it would pull the
-  // first plane off the panel); then the pixels on it, each weighted by its samples, until they
-  // no longer change.
+  // to the next: the ground, √n, 1/√n, n/Z, f·B/Z. The first plane: every observed interior
+  // pixel, each counted once (a textured background seen past the panel's edge gives many
+  // samples a pixel where a hole-ridden panel gives few: weighted by its samples, a strip of it
+  // would pull the first plane off the panel); then the pixels on it, each weighted by its
+  // samples, until they no longer change. σ_d is read on the interior throughout.
   std::vector<Eigen::Vector3d> rays(n);
   std::vector<double> mean_m(n, 0.0), weight(n, 0.0);
   std::vector<std::uint8_t> observed(n, 0), on_ground(n, 0);
   std::vector<double> inv_sqrt_n(n, 0.0), sqrt_n(n, 0.0), n_per_z(n, 0.0), disparity(n, 0.0);
   const PixelNormalizer normalized(in);
-  InverseDepthSums first;
+  const std::vector<std::uint8_t> inner = Interior(region);
+  std::size_t inner_observed = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector2d r = normalized.OfIndex(region.pixels[k]);
     rays[k] = {r.x(), r.y(), 1.0};
@@ -142,8 +171,13 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
     n_per_z[k] = weight[k] / mean_m[k];
     disparity[k] = fb / mean_m[k];
     on_ground[k] = ground && ground->Distance(mean_m[k] * rays[k]) < p.ground_distance_m;
-    first.Add(rays[k], 1.0, 1.0 / mean_m[k]);
+    inner_observed += inner[k];
   }
+  // The interior reads the panel's noise and first plane; too few observed pixels there: all.
+  const bool use_inner = inner_observed >= kMinInteriorPixels;
+  InverseDepthSums first;
+  for (std::size_t k = 0; k < n; ++k)
+    if (observed[k] && (inner[k] || !use_inner)) first.Add(rays[k], 1.0, 1.0 / mean_m[k]);
   out.plane_ok = first.Solve(&out.plane);
   // ClassifyMeanDepth, with those precomputed, on the current plane's depth on each observed
   // pixel's ray (computed once a plane; NaN on the others).
@@ -169,7 +203,8 @@ PanelPixels DecidePanelPixels(const camera::Intrinsics& in, const PanelRegion& r
       if (!observed[k]) continue;
       const double zp = out.plane.DepthOnRay(rays[k]);
       plane_z[k] = zp;
-      if (std::isfinite(zp)) residual.push_back(std::fabs(disparity[k] - fb / zp) * sqrt_n[k]);
+      if (std::isfinite(zp) && (inner[k] || !use_inner))
+        residual.push_back(std::fabs(disparity[k] - fb / zp) * sqrt_n[k]);
     }
     out.subpixel_rms_px = std::max(p.expected_subpixel_rms_px, ScatterPx(residual));
     if (it == p.refit_iterations) break;
