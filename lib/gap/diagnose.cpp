@@ -277,10 +277,14 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       // 2 and 3 seeds of 5 (diagnose_gap --inject-times). Such a law is not kept; it is named
       // "one of" with the range law whose signature correlates with it most (|r| ≥ 0.5) and
       // that earns alone, where the table does not keep that one. Like a rival of the folds, it is
-      // decided with the effect in the set read together, where it would be kept; without such
-      // a law it is kept as before. Its rival, r, and whether the rival's own fit alone sits at
-      // its grid's edge too; or nothing.
+      // decided with the effect in the set read together, where it would be kept. Without such a
+      // law it is not kept either, and what it would have taken stays in the remaining gap,
+      // named where it lies (unexplained): at 3 times the limit (seed 1, −1.87 px, beyond the
+      // offset's last node at −1.5 px) the offset no longer fits and a scale was kept at +20 %,
+      // its interval [−0.15, 0.5]. Whether the law's fit is at its grid's edge, its rival, r, and
+      // whether the rival's own fit alone sits at its grid's edge too; or nothing.
       struct Edge {
+        bool at_edge = false;
         std::string rival;
         double r = 0;
         bool rival_at_edge = false;
@@ -299,6 +303,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         if (!fit || !sims.surfaces[fit->term.candidate].candidate.range_law || !at_edge(*fit))
           return {};
         Edge best;
+        best.at_edge = true;
         for (const Confounded& c : sel.correlations) {
           const std::string other = c.a == e ? c.b : c.b == e ? c.a : "";
           if (other.empty() || !(std::fabs(c.correlation) >= 0.5) ||
@@ -307,7 +312,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           for (size_t j = 0; j < sel.effects.size(); ++j)
             if (sel.effects[j].name == other && sel.effects[j].earns &&
                 sims.surfaces[j].candidate.range_law)
-              best = {other, c.correlation, at_edge(sel.effects[j].fit)};
+              best = {true, other, c.correlation, at_edge(sel.effects[j].fit)};
         }
         return best;
       };
@@ -381,10 +386,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
           // read again without it. One dropped for too few folds is contested by its rival
           // whatever the selections earn together: that rival is not among them.
           contested[i] |= !w.rival.empty() && (held_out_earns || !w.earns);
-          const bool edge = !edge_rival[i].rival.empty();
+          const bool edge = edge_rival[i].at_edge, edge_rival_named = !edge_rival[i].rival.empty();
           const bool read_together =
               std::find(together.begin(), together.end(), r.steps[i].effect) != together.end();
-          edge_named[i] |= edge && read_together && held_out_earns && w.earns && w.rival.empty();
+          edge_named[i] |=
+              edge_rival_named && read_together && held_out_earns && w.earns && w.rival.empty();
           keep[i] = held_out_earns && w.earns && w.rival.empty() && !edge;
           if (keep[i]) {
             kept.push_back(r.steps[i].effect);
@@ -413,10 +419,11 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
                                : "; " + w.rival + " chosen " + (w.earns ? "at least as" : "more") +
                                      " often, in " +
                                      std::to_string(w.rival_count) + ", r = " + Num(w.rival_r)) +
-              (edge_rival[i].rival.empty()
-                   ? std::string()
-                   : "; fitted at its grid's edge, its size not determined, beside " +
-                         edge_rival[i].rival + ", r = " + Num(edge_rival[i].r)) +
+              (!edge ? std::string()
+                     : "; fitted at its grid's edge, its size not determined" +
+                           (edge_rival_named ? ", beside " + edge_rival[i].rival +
+                                                   ", r = " + Num(edge_rival[i].r)
+                                             : std::string())) +
               ")";
         }
         if (kept.empty() || kept == together || pass == 2) {

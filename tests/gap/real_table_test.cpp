@@ -242,7 +242,10 @@ TEST(RealTable, AnInjectionOfTheSimulatorsTableIsItsSimulationOfTheEffect) {
 // component, the scale was kept at its grid's edge (+20 %) with an interval to the registry's
 // bound; with each spread's loading per scenario (placement.h, tau_cell) the outer folds split
 // between the two again, and the pair is named "one of" them, nothing selected, with the far
-// over-read named unexplained in the median.
+// over-read named unexplained in the median. Once the region's noise was read on its interior
+// (metrics/panel_pixels.h), the offset beyond its last node no longer fitted and the scale was
+// kept alone at its grid's edge, its interval [−0.15, 0.5]: a range law at its grid's edge is
+// not kept, with a rival or without (lib/gap/diagnose.cpp), and the folds' split names the pair.
 TEST(Article, AnOffsetInjectedBeyondItsLimitIsKept) {
   std::vector<records::PanelMetrics> rows =
       io::ReadMetricsCsv(DEPTHBIAS_SOURCE_DIR "/config/data/paper_d455_outdoor.csv");

@@ -887,27 +887,39 @@ TEST(Cases, ThosePassingAtFourSeedsOfFiveKeepPassing) {
       if (seed == 1 && o.truth.name == "radial_disparity_residual small")
         ExpectIntervalOverFolds(o.gap_json, false);
       // The offset of 0.35 px, fitted per scenario at seed 1 (0.403, 0.403, 0.322, 0.334 px)
-      // and per light at seed 3 (0.406 in daylight, 0.313 at sunset): each light's placement
-      // draws, now that the test points' means weigh as the placement law says (one dispersion
-      // for both variance components held it shared at 0.347 at seed 1). Each group's refits
-      // without each distance widen its interval; all hold 0.35. At seed 3 sunset's,
+      // and per light at seed 3 (0.406 in daylight, 0.313 at sunset) while the region's noise
+      // was read over the whole region; shared at both since it is read on the region's
+      // interior (metrics/panel_pixels.h): 0.397 px [0.343, 0.452] and 0.402 px [0.332,
+      // 0.472]. Whatever the scope, each group's interval holds 0.35. At seed 3 sunset's,
       // [0.268, 0.358], missed it by 0.001 ([0.267, 0.349]) while a spread's recordings shared
       // their test point's displacement with one loading.
       if (o.truth.name == "disparity_offset large") {
+        EXPECT_TRUE(o.pass) << "seed " << seed << ": " << o.why;
+        const size_t sel = o.gap_json.find("\"selected\": [");
+        ASSERT_NE(sel, std::string::npos);
+        const size_t scope_at = o.gap_json.find("\"scope\": \"", sel);
+        ASSERT_NE(scope_at, std::string::npos);
+        const size_t from = scope_at + 10;
+        const std::string scope = o.gap_json.substr(from, o.gap_json.find('"', from) - from);
         std::vector<std::vector<double>> cis;
-        if (seed == 1) {
+        if (scope == "per_scenario") {
           cis = ExpectGroupIntervalsOverFolds(
-              o.gap_json, "per_scenario", {"daylight/HA", "daylight/HD", "sunset/HA", "sunset/HD"});
+              o.gap_json, scope, {"daylight/HA", "daylight/HD", "sunset/HA", "sunset/HD"});
           EXPECT_EQ(cis.size(), 4u);
-        } else {
-          cis = ExpectGroupIntervalsOverFolds(o.gap_json, "per_light", {"daylight", "sunset"});
+        } else if (scope == "per_light") {
+          cis = ExpectGroupIntervalsOverFolds(o.gap_json, scope, {"daylight", "sunset"});
           EXPECT_EQ(cis.size(), 2u);
+        } else {
+          EXPECT_EQ(scope, "shared");
+          cis.push_back(
+              NumbersFrom(o.gap_json, o.gap_json.find('[', o.gap_json.find("\"ci95\"", sel)), 2));
         }
         for (const auto& ci : cis) {
           ASSERT_EQ(ci.size(), 2u);
           EXPECT_LE(ci[0], 0.35) << seed;
           EXPECT_GE(ci[1], 0.35) << seed;
         }
+        continue;
       }
       if (o.truth.name == "radial_disparity_residual large") {
         EXPECT_TRUE(o.pass) << "seed " << seed << ": " << o.why;
