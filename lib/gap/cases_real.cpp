@@ -13,9 +13,27 @@
 namespace depthbias::gap {
 namespace {
 
+// The factor on the tilt's tangent of a row whose depths are read `length` times as long with
+// the spread along the panel's normal `spread` times. The protocols' panels face the camera, so
+// a row's normal_tilt_deg is the plane fit's error, σ along the normal over the panel's extent
+// L and √N of its pixels: (spread σ) / (L' √N'). Read far, panel_extract's window of the
+// panel's known size on the measured plane keeps L and holds N / length² of the pixels: the
+// tangent grows by spread · length (a disparity offset's r²·r = r³, a depth scale's s·s = s²).
+// Read near, the window takes in the background, which the region's decision leaves out: N
+// stays and the extent measured on the nearer plane is L · length, so spread / length (r, and
+// 1 for a scale). Measured on the simulator (simulate --metrics-only, seeds 1–3, 48 cells a
+// distance and preset): an offset of −0.5 px (1.03–1.14 times as far) grew the tilt's RMS with
+// exponents 2.3–4.4 of the depths' ratio (3.2 on average), a depth scale of +10 % with 1.5–2.9
+// (2.1); the map before this one took Z'/Z and 1, which a far-reading offset's simulation
+// outgrew at 16 m. A panel turned from the camera has a geometric part, which an offset moves
+// by Z'/Z: not a tilt these protocols have.
+double TiltFactor(double length, double spread) {
+  return length >= 1 ? spread * length : spread / length;
+}
+
 // Every depth and range of a row read `length` times as long, the spreads and the mean's departure
-// from the median `spread` times (the slope of the map at the median), the tilt's tangent `tilt`
-// times (TiltFactor). The panel's width and height are the extent, on the fitted plane, of the
+// from the median `spread` times (the slope of the map at the median), the tilt's tangent by
+// TiltFactor. The panel's width and height are the extent, on the fitted plane, of the
 // region's sampled pixels, the region drawn from panel_extract's window: the panel's known size
 // laid on the measured plane (panel/panel_fit.h). Read far, that window lies within the panel's
 // image and measures the known size as before: the field campaign's bags, with a −0.25 px offset
@@ -33,7 +51,7 @@ namespace {
 // plane and the metric stays there (the simulator's daylight/HD cells at 12 and 16 m read
 // 0.280–0.287 m with or without a −0.97 px offset). The spread's map stops there, at the
 // shorter side measured (`side_m` where the row has none); a row beyond it keeps its value.
-void MapRow(double length, double spread, double tilt, double side_m, records::PanelMetrics* m) {
+void MapRow(double length, double spread, double side_m, records::PanelMetrics* m) {
   const double tail = m->mean_m - m->median_m;
   m->median_m *= length;
   m->mean_m = m->median_m + spread * tail;
@@ -45,26 +63,10 @@ void MapRow(double length, double spread, double tilt, double side_m, records::P
   m->panel_width_m *= std::min(1.0, length);
   m->panel_height_m *= std::min(1.0, length);
   m->range_m *= length;
-  if (std::isfinite(m->normal_tilt_deg))
-    m->normal_tilt_deg = std::atan(std::tan(m->normal_tilt_deg * M_PI / 180) * tilt) * 180 / M_PI;
-}
-
-// The factor on the tilt's tangent of a row whose depths are read `length` times as long with
-// the spread along the panel's normal `spread` times. The protocols' panels face the camera, so
-// a row's normal_tilt_deg is the plane fit's error, σ along the normal over the panel's extent
-// L and √N of its pixels: (spread σ) / (L' √N'). Read far, panel_extract's window of the
-// panel's known size on the measured plane keeps L and holds N / length² of the pixels: the
-// tangent grows by spread · length (a disparity offset's r²·r = r³, a depth scale's s·s = s²).
-// Read near, the window takes in the background, which the region's decision leaves out: N
-// stays and the extent measured on the nearer plane is L · length, so spread / length (r, and
-// 1 for a scale). Measured on the simulator (simulate --metrics-only, seeds 1–3, 48 cells a
-// distance and preset): an offset of −0.5 px (1.03–1.14 times as far) grew the tilt's RMS with
-// exponents 2.3–4.4 of the depths' ratio (3.2 on average), a depth scale of +10 % with 1.5–2.9
-// (2.1); the map before this one took Z'/Z and 1, which a far-reading offset's simulation
-// outgrew at 16 m. A panel turned from the camera has a geometric part, which an offset moves
-// by Z'/Z: not a tilt these protocols have.
-double TiltFactor(double length, double spread) {
-  return length >= 1 ? spread * length : spread / length;
+  if (std::isfinite(m->normal_tilt_deg)) {
+    const double tangent = std::tan(m->normal_tilt_deg * M_PI / 180) * TiltFactor(length, spread);
+    m->normal_tilt_deg = std::atan(tangent) * 180 / M_PI;
+  }
 }
 
 constexpr const char* kTimesLimit = " × its limit)";
@@ -146,7 +148,7 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
       if (!(m.median_m > 0)) continue;  // nothing measured: the row stays as it was
       if (!offset) {
         const double scale = 1.0 + p->second;
-        MapRow(scale, scale, TiltFactor(scale, scale), panel_side_m, &m);
+        MapRow(scale, scale, panel_side_m, &m);
         continue;
       }
       const double d = fb / m.median_m + p->second;
@@ -154,7 +156,7 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
         throw std::invalid_argument(c.name + ": an offset of " + std::to_string(p->second) +
                                     " px sends " + m.bag + " beyond infinity");
       const double r = fb / d / m.median_m;
-      MapRow(r, r * r, TiltFactor(r, r * r), panel_side_m, &m);
+      MapRow(r, r * r, panel_side_m, &m);
     }
   }
   return rows;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <utility>
 
 #include <Eigen/Cholesky>
@@ -61,19 +60,11 @@ double ScatterPx(std::vector<double>& r) {
 
 // The region's interior: its pixels at least a quarter of the bounding box's width (height) in
 // from its left and right (top and bottom) sides, the central half of the panel's image each way.
+// A region without a bounding box (RegionFromRectangle and RegionFromBox give one) has none.
 std::vector<std::uint8_t> Interior(const PanelRegion& region) {
   std::vector<std::uint8_t> inner(region.pixels.size(), 0);
-  if (region.width <= 0 || region.pixels.empty()) return inner;
-  int u0 = region.u_min, u1 = region.u_max, v0 = region.v_min, v1 = region.v_max;
-  if (u1 < u0 || v1 < v0) {  // no bounding box given: the pixels'
-    u0 = v0 = std::numeric_limits<int>::max();
-    u1 = v1 = std::numeric_limits<int>::min();
-    for (std::uint32_t idx : region.pixels) {
-      const int u = static_cast<int>(idx % static_cast<std::uint32_t>(region.width));
-      const int v = static_cast<int>(idx / static_cast<std::uint32_t>(region.width));
-      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
-    }
-  }
+  const int u0 = region.u_min, u1 = region.u_max, v0 = region.v_min, v1 = region.v_max;
+  if (region.width <= 0 || u1 < u0 || v1 < v0) return inner;
   const double qu = (u1 - u0 + 1) / 4.0, qv = (v1 - v0 + 1) / 4.0;
   for (std::size_t k = 0; k < region.pixels.size(); ++k) {
     const int u = static_cast<int>(region.pixels[k] % static_cast<std::uint32_t>(region.width));

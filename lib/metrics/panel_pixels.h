@@ -24,8 +24,8 @@
 // at 16.02 m, whose first, wider scatter (0.48 px) they held up themselves: the tilt read 1.5° at
 // one and 14.4° at the other, mean − median 0.07 and 0.65 m. Read on the interior, the border is
 // left out at every distance from 15.90 to 16.10 m (tilt 0.5–3.6°). Fewer than 12 observed
-// interior pixels: the whole region. The panel's pixels are the region's pixels that are holes
-// or on the plane.
+// interior pixels, or a region without a bounding box: the whole region. The panel's pixels are
+// the region's pixels that are holes or on the plane.
 
 #include <cstdint>
 #include <string>
