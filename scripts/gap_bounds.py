@@ -21,12 +21,23 @@ guess, can do better where the guess is right). The
 calibration, the placement's own estimate, the outer folds and the other candidates only take
 information away. Pairs are read jointly (Monte Carlo over the estimate's normal law, seeded).
 
+With --tables DIR..., each DIR a `diagnose_gap --cases --out DIR` folder (one per seed), each
+case's own table is read the same way: its test points' median departures from the calibrated
+base (gap.json's cells, real − sim, averaged over a test point's recordings) regressed on the
+laws' secants under the placement's law. Whether that table's medians themselves put every size
+within 20 %, seed by seed, beside whether the case passed (DIR/cases.md), tells a failure the
+table's draw made (the medians miss too) from one the diagnosis made (they hold). Beside a
+temporal drift, whose size the temporal spread gives, its median shift is known and taken off:
+an offset of rate × the mean frame time (frames 0–9 at 30 fps: 0.15 s).
+
 Usage: .venv/bin/python scripts/gap_bounds.py [--protocol config/protocol_paper.yaml]
-       [--sensor config/sensor_calibrated.yaml] [--placement-pct 2]
+       [--sensor config/sensor_calibrated.yaml] [--placement-pct 2] [--tables DIR...]
 """
 
 import argparse
+import json
 import math
+import os
 import sys
 
 import numpy as np
@@ -47,6 +58,9 @@ def main():
                          "suite's null tables read 0.0043)")
     ap.add_argument("--recordings", type=int, default=4,
                     help="recordings sharing a test point's placement (presets × emitter)")
+    ap.add_argument("--tables", nargs="+", default=[], metavar="DIR",
+                    help="diagnose_gap --cases output folders, one per seed: each case's own "
+                         "table read on its medians")
     args = ap.parse_args()
     if not (args.placement_pct > 0) or not (args.median_noise_at_10m >= 0) or args.recordings < 1:
         sys.exit("gap_bounds: --placement-pct must be > 0, --median-noise-at-10m >= 0 and "
@@ -162,6 +176,87 @@ def main():
         if len(laws) == 2:
             r = cov[0, 1] / (se[0] * se[1])
             print(f"|  | (the pair's estimates correlate r = {r:.3f}) | | | | | | | |")
+    if args.tables:
+        # The drift beside the offset: its median shift is an offset of 0.6 px/s × 0.15 s.
+        cases.append(("disparity_offset + temporal_drift", [("disparity_offset", 0.15)], None))
+        print()
+        print(TablesReport(args.tables, cases, fb, along_sight, sd_point,
+                           {"disparity_offset + temporal_drift": 0.6 * 4.5 / 30}))
+
+
+def CaseFile(name):
+    """A case's gap.json in DIR/cases: each byte of its name not a letter or digit an underscore
+    (apps/diagnose_gap.cpp)."""
+    return "".join(chr(b) if chr(b).isascii() and chr(b).isalnum() else "_"
+                   for b in name.encode("utf-8")) + ".json"
+
+
+def Passes(folder):
+    """Case name -> whether it passed, from DIR/cases.md's table."""
+    out = {}
+    try:
+        with open(os.path.join(folder, "cases.md"), encoding="utf-8") as f:
+            for line in f:
+                cells = [c.strip() for c in line.split("|")]
+                if len(cells) > 9 and cells[1] not in ("case", "---"):
+                    out[cells[1]] = cells[8] == "yes"
+    except OSError as e:
+        sys.exit(f"gap_bounds: {folder}/cases.md: cannot read it ({e.strerror})")
+    return out
+
+
+def TablesReport(folders, cases, fb, along_sight, sd_point, known_offset):
+    """Each case's table read on its own medians, seed by seed (module docstring)."""
+    def secant(law, value, z):  # the law's whole move of the median over its size
+        if law == "disparity_offset":
+            return (fb / (fb / z + value) - z) / value if value else -z * z / fb
+        return z
+
+    lines = ["| case | the table's medians put every size within 20 % | the case passes | "
+             "seed by seed: the medians' sizes (within 20 %?; passed?) |", "|---|---|---|---|"]
+    for name, laws, light in cases:
+        shown, held, passed, seen = [], 0, 0, 0
+        for folder in folders:
+            path = os.path.join(folder, "cases", CaseFile(name))
+            if not os.path.exists(path):
+                continue
+            try:
+                with open(path, encoding="utf-8") as f:
+                    cells = json.load(f)["cells"]
+            except (OSError, ValueError, KeyError) as e:
+                sys.exit(f"gap_bounds: {path}: cannot read its cells ({e})")
+            points = {}
+            for c in cells:
+                real, sim = c["real"].get("median_bias_m"), c["sim"].get("median_bias_m")
+                if light and c["light"] != light:
+                    continue
+                if isinstance(real, (int, float)) and isinstance(sim, (int, float)):
+                    points.setdefault((c["light"], c["distance_m"], c["angle_deg"]),
+                                      []).append(real - sim)
+            shift = known_offset.get(name, 0.0)
+            total = shift + sum(v for n, v in laws if n == "disparity_offset")
+            x, y, w = [], [], []
+            for (_, d, a), dep in sorted(points.items()):
+                z = d * (math.cos(math.radians(a)) if along_sight else 1)
+                x.append([secant(n, total if n == "disparity_offset" else v, z)
+                          for n, v in laws])
+                y.append(np.mean(dep) - shift * secant("disparity_offset", total, z))
+                w.append(1 / sd_point(z) ** 2)
+            x, y, w = np.array(x), np.array(y), np.array(w)
+            fitted = np.linalg.lstsq(x * np.sqrt(w)[:, None], y * np.sqrt(w), rcond=None)[0]
+            ok = all(abs(f - v) <= 0.2 * abs(v) for f, (_, v) in zip(fitted, laws))
+            did = Passes(folder).get(name)
+            seen += 1
+            held += ok
+            passed += bool(did)
+            shown.append(f"{os.path.basename(os.path.normpath(folder))}: "
+                         + ", ".join(f"{f:.3g}" for f in fitted)
+                         + f" ({'holds' if ok else 'misses'}; "
+                         + f"{'passed' if did else 'failed' if did is False else '?'})")
+        if seen:
+            lines.append(f"| {name} | {held} of {seen} | {passed} of {seen} | "
+                         + "; ".join(shown) + " |")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,10 @@
 # CI (tests/gap/withheld_test.cpp) asserts the criteria and the cases that pass.
 # One seed is one draw of every case's noise and placement; --seeds N runs seeds 1 to N (each
 # into OUT_DIR/seed-S) and prints how often each case passes (scripts/gap_cases_seeds.py), also
-# written to OUT_DIR/seeds.md. About 5 minutes a seed on 2 cores.
+# written to OUT_DIR/seeds.md, then what the range-law cases' tables allow: the smallest
+# standard error of each size under the placement scatter and, seed by seed, whether the
+# table's own medians put the sizes within 20 % (scripts/gap_bounds.py, OUT_DIR/bounds.md).
+# About 5 minutes a seed on 2 cores.
 # Usage: scripts/gap_cases.sh [BUILD_DIR] [OUT_DIR] [--no-field] [--seeds N]
 #   OUT_DIR/cases.md is written too; the field bags go to OUT_DIR/field (or a temporary folder).
 set -euo pipefail
@@ -78,3 +81,10 @@ done
 .venv/bin/python scripts/gap_cases_seeds.py "${TABLES[@]}" > "$OUT_DIR/seeds.md.tmp"
 mv "$OUT_DIR/seeds.md.tmp" "$OUT_DIR/seeds.md"
 cat "$OUT_DIR/seeds.md"
+# What the range-law cases' tables allow, seed by seed (scripts/gap_bounds.py).
+SEED_DIRS=()
+for ((s = 1; s <= SEEDS; s++)); do SEED_DIRS+=("$OUT_DIR/seed-$s"); done
+.venv/bin/python scripts/gap_bounds.py --tables "${SEED_DIRS[@]}" > "$OUT_DIR/bounds.md.tmp"
+mv "$OUT_DIR/bounds.md.tmp" "$OUT_DIR/bounds.md"
+echo
+cat "$OUT_DIR/bounds.md"
