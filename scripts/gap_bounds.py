@@ -226,13 +226,20 @@ def TablesReport(folders, cases, fb, along_sight, sd_point, known_offset):
             except (OSError, ValueError, KeyError) as e:
                 sys.exit(f"gap_bounds: {path}: cannot read its cells ({e})")
             points = {}
-            for c in cells:
-                real, sim = c["real"].get("median_bias_m"), c["sim"].get("median_bias_m")
-                if light and c["light"] != light:
-                    continue
-                if isinstance(real, (int, float)) and isinstance(sim, (int, float)):
-                    points.setdefault((c["light"], c["distance_m"], c["angle_deg"]),
-                                      []).append(real - sim)
+            try:
+                for c in cells:
+                    real, sim = c["real"].get("median_bias_m"), c["sim"].get("median_bias_m")
+                    if light and c["light"] != light:
+                        continue
+                    if isinstance(real, (int, float)) and isinstance(sim, (int, float)):
+                        points.setdefault((c["light"], float(c["distance_m"]),
+                                           float(c["angle_deg"])), []).append(real - sim)
+            except (KeyError, TypeError, AttributeError, ValueError) as e:
+                sys.exit(f"gap_bounds: {path}: a cell without its light, distance, angle, "
+                         f"real or sim ({e.__class__.__name__}: {e})")
+            if len(points) < len(laws):
+                sys.exit(f"gap_bounds: {path}: {len(points)} test points with a median, too few "
+                         "to read the case's laws")
             shift = known_offset.get(name, 0.0)
             total = shift + sum(v for n, v in laws if n == "disparity_offset")
             x, y, w = [], [], []
