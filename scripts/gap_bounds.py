@@ -28,7 +28,7 @@ laws' secants under the placement's law. Whether that table's medians themselves
 within 20 %, seed by seed, beside whether the case passed (DIR/cases.md), tells a failure the
 table's draw made (the medians miss too) from one the diagnosis made (they hold). Beside a
 temporal drift, whose size the temporal spread gives, its median shift is known and taken off:
-an offset of rate × the mean frame time (frames 0–9 at 30 fps: 0.15 s).
+an offset of rate × the mean frame time (the diagnosis's 10 frames at 30 fps: 0.15 s).
 
 Usage: .venv/bin/python scripts/gap_bounds.py [--protocol config/protocol_paper.yaml]
        [--sensor config/sensor_calibrated.yaml] [--placement-pct 2] [--tables DIR...]
@@ -177,21 +177,27 @@ def main():
             r = cov[0, 1] / (se[0] * se[1])
             print(f"|  | (the pair's estimates correlate r = {r:.3f}) | | | | | | | |")
     if args.tables:
-        # The drift beside the offset: its median shift is an offset of 0.6 px/s × 0.15 s.
+        try:
+            fps = float(p.get("fps", 30))
+        except (TypeError, ValueError):
+            sys.exit(f"gap_bounds: {args.protocol}: fps is not a number")
+        if not fps > 0:
+            sys.exit(f"gap_bounds: {args.protocol}: fps must be > 0")
+        # The drift beside the offset (lib/gap/cases.cpp: 0.6 px/s), its median shift known.
         cases.append(("disparity_offset + temporal_drift", [("disparity_offset", 0.15)], None))
         print()
-        print(TablesReport(args.tables, cases, fb, along_sight, sd_point,
-                           {"disparity_offset + temporal_drift": 0.6 * 4.5 / 30}))
+        print(tables_report(args.tables, cases, fb, along_sight, sd_point, fps,
+                            {"disparity_offset + temporal_drift": 0.6}))
 
 
-def CaseFile(name):
+def case_file(name):
     """A case's gap.json in DIR/cases: each byte of its name not a letter or digit an underscore
     (apps/diagnose_gap.cpp)."""
     return "".join(chr(b) if chr(b).isascii() and chr(b).isalnum() else "_"
                    for b in name.encode("utf-8")) + ".json"
 
 
-def Passes(folder):
+def passes(folder):
     """Case name -> whether it passed, from DIR/cases.md's table."""
     out = {}
     try:
@@ -205,8 +211,10 @@ def Passes(folder):
     return out
 
 
-def TablesReport(folders, cases, fb, along_sight, sd_point, known_offset):
-    """Each case's table read on its own medians, seed by seed (module docstring)."""
+def tables_report(folders, cases, fb, along_sight, sd_point, fps, drift_px_per_s):
+    """Each case's table read on its own medians, seed by seed (module docstring). A drift's
+    median shift is an offset of its rate times the mean frame time, (frames − 1) / 2 / fps, the
+    frames those of the case's diagnosis (gap.json's settings)."""
     def secant(law, value, z):  # the law's whole move of the median over its size
         if law == "disparity_offset":
             return (fb / (fb / z + value) - z) / value if value else -z * z / fb
@@ -214,17 +222,20 @@ def TablesReport(folders, cases, fb, along_sight, sd_point, known_offset):
 
     lines = ["| case | the table's medians put every size within 20 % | the case passes | "
              "seed by seed: the medians' sizes (within 20 %?; passed?) |", "|---|---|---|---|"]
+    passed_in = {folder: passes(folder) for folder in folders}
     for name, laws, light in cases:
         shown, held, passed, seen = [], 0, 0, 0
         for folder in folders:
-            path = os.path.join(folder, "cases", CaseFile(name))
+            path = os.path.join(folder, "cases", case_file(name))
             if not os.path.exists(path):
                 continue
             try:
                 with open(path, encoding="utf-8") as f:
-                    cells = json.load(f)["cells"]
-            except (OSError, ValueError, KeyError) as e:
-                sys.exit(f"gap_bounds: {path}: cannot read its cells ({e})")
+                    doc = json.load(f)
+                cells = doc["cells"]
+                frames = int(doc["settings"]["frames"])
+            except (OSError, ValueError, KeyError, TypeError) as e:
+                sys.exit(f"gap_bounds: {path}: cannot read its cells and frames ({e})")
             points = {}
             try:
                 for c in cells:
@@ -240,7 +251,7 @@ def TablesReport(folders, cases, fb, along_sight, sd_point, known_offset):
             if len(points) < len(laws):
                 sys.exit(f"gap_bounds: {path}: {len(points)} test points with a median, too few "
                          "to read the case's laws")
-            shift = known_offset.get(name, 0.0)
+            shift = drift_px_per_s.get(name, 0.0) * (frames - 1) / 2 / fps
             total = shift + sum(v for n, v in laws if n == "disparity_offset")
             x, y, w = [], [], []
             for (_, d, a), dep in sorted(points.items()):
@@ -252,7 +263,7 @@ def TablesReport(folders, cases, fb, along_sight, sd_point, known_offset):
             x, y, w = np.array(x), np.array(y), np.array(w)
             fitted = np.linalg.lstsq(x * np.sqrt(w)[:, None], y * np.sqrt(w), rcond=None)[0]
             ok = all(abs(f - v) <= 0.2 * abs(v) for f, (_, v) in zip(fitted, laws))
-            did = Passes(folder).get(name)
+            did = passed_in[folder].get(name)
             seen += 1
             held += ok
             passed += bool(did)

@@ -3,8 +3,9 @@
 # a disparity offset of 0.35 px read back as 0.35 (within 20 %) where the case passed, one of
 # 0.5 px read beyond 20 % of 0.35 where it failed (0.46–0.54: the law's secant is taken at the
 # injected 0.35 px); a sunset-only offset of 0.15 px read
-# on the sunset test points alone, daylight carrying another offset that must not count; then a
-# gap.json without cells, refused by name.
+# on the sunset test points alone, daylight carrying another offset that must not count; an
+# offset of 0.15 px beside a drift whose median shift (0.09 px) is taken off; then a gap.json
+# without cells, refused by name.
 # Usage: gap_bounds_tables_test.sh PYTHON SOURCE_DIR
 set -euo pipefail
 PY=$1 SRC=$2
@@ -31,7 +32,7 @@ def table(offset_of_light, spread):
                                       "distance_m": d, "angle_deg": a,
                                       "real": {"median_bias_m": sim + move + placed},
                                       "sim": {"median_bias_m": sim}})
-    return {"cells": cells}
+    return {"settings": {"frames": 10}, "cells": cells}
 row = "| {} | - | - | - | - | - | - | {} | |\n"
 for seed, size, passed in (("seed-a", 0.35, "yes"), ("seed-b", 0.5, "**no**")):
     os.makedirs(f"{out}/{seed}/cases")
@@ -39,6 +40,9 @@ for seed, size, passed in (("seed-a", 0.35, "yes"), ("seed-b", 0.5, "**no**")):
         json.dump(table({"daylight": size, "sunset": size}, 0.001), f)
     with open(f"{out}/{seed}/cases/disparity_offset_sunset_only.json", "w") as f:
         json.dump(table({"daylight": 0.4, "sunset": 0.15}, 0.001), f)
+    # Beside a drift of 0.6 px/s over 10 frames at 30 fps, the medians move as 0.15 + 0.09 px.
+    with open(f"{out}/{seed}/cases/disparity_offset___temporal_drift.json", "w") as f:
+        json.dump(table({"daylight": 0.24, "sunset": 0.24}, 0.001), f)
     with open(f"{out}/{seed}/cases.md", "w") as f:
         f.write("| case | injected | selected | recovered | max error | simulated shrink | "
                 "unexplained | pass | why not |\n|---|---|---|---|---|---|---|---|---|\n")
@@ -59,6 +63,8 @@ grep -Eq '^\| disparity_offset large \| 1 of 2 \| 1 of 2 \| seed-a: 0\.35[0-9]* 
   fail "a case without tables printed"
 grep -Eq '^\| disparity_offset sunset only \| 2 of 2 \| 0 of 2 \| seed-a: 0\.1(4[5-9]|5[0-5])[0-9]* \(holds; failed\); seed-b: 0\.1(4[5-9]|5[0-5])[0-9]* \(holds; failed\) \|$' \
   "$D/out.txt" || fail "the sunset-only offset not read on the sunset test points alone"
+grep -Eq '^\| disparity_offset \+ temporal_drift \| 2 of 2 \| 0 of 2 \| seed-a: 0\.1(4[5-9]|5[0-5])[0-9]* \(holds; \?\); ' \
+  "$D/out.txt" || fail "the offset beside the drift not read with the drift's shift taken off"
 rc=0
 "$PY" "$SRC/scripts/gap_bounds.py" --protocol "$SRC/config/protocol_paper.yaml" \
   --sensor "$SRC/config/sensor_calibrated.yaml" --tables "$D/broken" > /dev/null 2> "$D/err" || rc=$?
