@@ -28,7 +28,9 @@ laws' secants under the placement's law. Whether that table's medians themselves
 within 20 %, seed by seed, beside whether the case passed (DIR/cases.md), tells a failure the
 table's draw made (the medians miss too) from one the diagnosis made (they hold). Beside a
 temporal drift, whose size the temporal spread gives, its median shift is known and taken off:
-an offset of rate × the mean frame time (the diagnosis's 10 frames at 30 fps: 0.15 s).
+an offset of rate × the mean frame time (the diagnosis's 10 frames at 30 fps: 0.15 s). The
+sizes read against are each folder's own, from its cases.md's injected column (the suite's one
+definition, lib/gap/cases.cpp), not the list above.
 
 Usage: .venv/bin/python scripts/gap_bounds.py [--protocol config/protocol_paper.yaml]
        [--sensor config/sensor_calibrated.yaml] [--placement-pct 2] [--tables DIR...]
@@ -183,11 +185,10 @@ def main():
             sys.exit(f"gap_bounds: {args.protocol}: fps is not a number")
         if not fps > 0:
             sys.exit(f"gap_bounds: {args.protocol}: fps must be > 0")
-        # The drift beside the offset (lib/gap/cases.cpp: 0.6 px/s), its median shift known.
-        cases.append(("disparity_offset + temporal_drift", [("disparity_offset", 0.15)], None))
+        # The offset beside a drift, whose median shift is known (its size from cases.md).
+        names = [name for name, _, _ in cases] + ["disparity_offset + temporal_drift"]
         print()
-        print(tables_report(args.tables, cases, fb, along_sight, sd_point, fps,
-                            {"disparity_offset + temporal_drift": 0.6}))
+        print(tables_report(args.tables, names, fb, along_sight, sd_point, fps))
 
 
 def case_file(name):
@@ -197,24 +198,57 @@ def case_file(name):
                    for b in name.encode("utf-8")) + ".json"
 
 
-def passes(folder):
-    """Case name -> whether it passed, from DIR/cases.md's table."""
+RANGE_LAWS = {"disparity_offset": "delta_px", "depth_scale": "scale_rel"}
+
+
+def parse_injected(text):
+    """cases.md's injected column -> (range laws [(name, size)], drift rate px/s, light or None),
+    or None where it names anything else: "disparity_offset (delta_px 0.15, sunset only);
+    temporal_drift (rate_px_per_s 0.6)"."""
+    laws, drift, light = [], 0.0, None
+    for part in text.split(";"):
+        part = part.strip()
+        if "(" not in part or not part.endswith(")"):
+            return None
+        name, inside = part[:-1].split("(", 1)
+        name, values = name.strip(), {}
+        for item in inside.split(","):
+            words = item.split()
+            if len(words) == 2 and words[1] == "only":
+                light = words[0]
+                continue
+            try:
+                values[words[0]] = float(words[1]) if len(words) == 2 else None
+            except ValueError:
+                return None
+        if name == "temporal_drift" and values.get("rate_px_per_s") is not None:
+            drift = values["rate_px_per_s"]
+        elif name in RANGE_LAWS and values.get(RANGE_LAWS[name]) is not None:
+            laws.append((name, values[RANGE_LAWS[name]]))
+        else:
+            return None
+    return (laws, drift, light) if laws else None
+
+
+def read_cases_md(folder):
+    """Case name -> (passed, injected text), from DIR/cases.md's table."""
     out = {}
     try:
         with open(os.path.join(folder, "cases.md"), encoding="utf-8") as f:
             for line in f:
                 cells = [c.strip() for c in line.split("|")]
                 if len(cells) > 9 and cells[1] not in ("case", "---"):
-                    out[cells[1]] = cells[8] == "yes"
+                    out[cells[1]] = (cells[8] == "yes", cells[2])
     except OSError as e:
         sys.exit(f"gap_bounds: {folder}/cases.md: cannot read it ({e.strerror})")
     return out
 
 
-def tables_report(folders, cases, fb, along_sight, sd_point, fps, drift_px_per_s):
-    """Each case's table read on its own medians, seed by seed (module docstring). A drift's
-    median shift is an offset of its rate times the mean frame time, (frames − 1) / 2 / fps, the
-    frames those of the case's diagnosis (gap.json's settings)."""
+def tables_report(folders, names, fb, along_sight, sd_point, fps):
+    """Each named case's table read on its own medians, seed by seed (module docstring), against
+    the sizes its folder's cases.md says were injected. A drift's median shift is an offset of
+    its rate times the mean frame time, (frames − 1) / 2 / fps, the frames those of the case's
+    diagnosis (gap.json's settings)."""
     def secant(law, value, z):  # the law's whole move of the median over its size
         if law == "disparity_offset":
             return (fb / (fb / z + value) - z) / value if value else -z * z / fb
@@ -222,13 +256,22 @@ def tables_report(folders, cases, fb, along_sight, sd_point, fps, drift_px_per_s
 
     lines = ["| case | the table's medians put every size within 20 % | the case passes | "
              "seed by seed: the medians' sizes (within 20 %?; passed?) |", "|---|---|---|---|"]
-    passed_in = {folder: passes(folder) for folder in folders}
-    for name, laws, light in cases:
+    rows_of = {folder: read_cases_md(folder) for folder in folders}
+    for name in names:
         shown, held, passed, seen = [], 0, 0, 0
         for folder in folders:
             path = os.path.join(folder, "cases", case_file(name))
             if not os.path.exists(path):
                 continue
+            if name not in rows_of[folder]:
+                sys.exit(f"gap_bounds: {folder}/cases.md: no row for \"{name}\", whose "
+                         "gap.json is there")
+            did, injected = rows_of[folder][name]
+            parsed = parse_injected(injected)
+            if parsed is None:
+                sys.exit(f"gap_bounds: {folder}/cases.md: \"{name}\": cannot read the range "
+                         f"laws' sizes in its injected column (\"{injected}\")")
+            laws, drift, light = parsed
             try:
                 with open(path, encoding="utf-8") as f:
                     doc = json.load(f)
@@ -251,7 +294,7 @@ def tables_report(folders, cases, fb, along_sight, sd_point, fps, drift_px_per_s
             if len(points) < len(laws):
                 sys.exit(f"gap_bounds: {path}: {len(points)} test points with a median, too few "
                          "to read the case's laws")
-            shift = drift_px_per_s.get(name, 0.0) * (frames - 1) / 2 / fps
+            shift = drift * (frames - 1) / 2 / fps
             total = shift + sum(v for n, v in laws if n == "disparity_offset")
             x, y, w = [], [], []
             for (_, d, a), dep in sorted(points.items()):
@@ -263,14 +306,13 @@ def tables_report(folders, cases, fb, along_sight, sd_point, fps, drift_px_per_s
             x, y, w = np.array(x), np.array(y), np.array(w)
             fitted = np.linalg.lstsq(x * np.sqrt(w)[:, None], y * np.sqrt(w), rcond=None)[0]
             ok = all(abs(f - v) <= 0.2 * abs(v) for f, (_, v) in zip(fitted, laws))
-            did = passed_in[folder].get(name)
             seen += 1
             held += ok
             passed += bool(did)
             shown.append(f"{os.path.basename(os.path.normpath(folder))}: "
                          + ", ".join(f"{f:.3g}" for f in fitted)
                          + f" ({'holds' if ok else 'misses'}; "
-                         + f"{'passed' if did else 'failed' if did is False else '?'})")
+                         + f"{'passed' if did else 'failed'})")
         if seen:
             lines.append(f"| {name} | {held} of {seen} | {passed} of {seen} | "
                          + "; ".join(shown) + " |")
