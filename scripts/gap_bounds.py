@@ -214,6 +214,8 @@ def parse_injected(text):
         name, values = name.strip(), {}
         for item in inside.split(","):
             words = item.split()
+            if not words:
+                return None
             if len(words) == 2 and words[1] == "only":
                 light = words[0]
                 continue
