@@ -22,8 +22,8 @@ calibration, the placement's own estimate, the outer folds and the other candida
 information away. Pairs are read jointly (Monte Carlo over the estimate's normal law, seeded).
 
 With --tables DIR..., each DIR a `diagnose_gap --cases --out DIR` folder (one per seed), each
-case's own table is read the same way: its test points' median departures from the calibrated
-base (gap.json's cells, real − sim, averaged over a test point's recordings) regressed on the
+case's own table is read the same way: its test points' median departures from the base
+simulation (gap.json's cells, real − sim, averaged over a test point's recordings) regressed on the
 laws' secants under the placement's law. Whether that table's medians themselves put every size
 within 20 %, seed by seed, beside whether the case passed (DIR/cases.md), tells a failure the
 table's draw made (the medians miss too) from one the diagnosis made (they hold). Beside a
