@@ -9,137 +9,17 @@
 #include <sstream>
 
 #include "gap/cases.h"
+#include "gap/json_read.h"
 
 namespace depthbias::gap {
 namespace {
+
+using Json = JsonValue;
 
 // The light of a scenario "light/preset".
 std::string LightOf(const std::string& scenario) {
   return scenario.substr(0, scenario.rfind('/'));
 }
-
-// A JSON value, read by a small recursive-descent parser (gap.json is ours: no streaming).
-struct Json {
-  enum Type { kNull, kBool, kNumber, kString, kArray, kObject } type = kNull;
-  double number = NAN;
-  std::string text;
-  std::vector<Json> items;
-  std::vector<std::pair<std::string, Json>> members;
-
-  const Json* Find(const std::string& key) const {
-    for (const auto& [k, v] : members)
-      if (k == key) return &v;
-    return nullptr;
-  }
-  // The number `key` holds, or NaN (no such key, or not a number).
-  double Number(const std::string& key) const {
-    const Json* v = Find(key);
-    return v && v->type == kNumber ? v->number : NAN;
-  }
-  bool empty() const {
-    return type == kNull || (type == kArray && items.empty()) ||
-           (type == kObject && members.empty()) || (type == kString && text.empty());
-  }
-};
-
-class Parser {
- public:
-  explicit Parser(const std::string& s) : s_(s) {}
-  bool Parse(Json* out) {
-    if (!Value(out, 0)) return false;
-    Space();
-    return i_ == s_.size();
-  }
-
- private:
-  void Space() {
-    while (i_ < s_.size() && (s_[i_] == ' ' || s_[i_] == '\n' || s_[i_] == '\t' || s_[i_] == '\r'))
-      ++i_;
-  }
-  bool Literal(const char* word) {
-    const std::string w(word);
-    if (s_.compare(i_, w.size(), w) != 0) return false;
-    i_ += w.size();
-    return true;
-  }
-  bool String(std::string* out) {
-    if (s_[i_] != '"') return false;
-    for (++i_; i_ < s_.size(); ++i_) {
-      const char c = s_[i_];
-      if (c == '"') {
-        ++i_;
-        return true;
-      }
-      if (c != '\\') {
-        *out += c;
-        continue;
-      }
-      if (++i_ >= s_.size()) return false;
-      switch (s_[i_]) {
-        case 'n': *out += '\n'; break;
-        case 't': *out += '\t'; break;
-        case 'r': *out += '\r'; break;
-        case 'b': *out += '\b'; break;
-        case 'f': *out += '\f'; break;
-        case 'u': {  // the writer escapes control characters only
-          if (i_ + 4 >= s_.size()) return false;
-          *out += static_cast<char>(std::strtol(s_.substr(i_ + 1, 4).c_str(), nullptr, 16));
-          i_ += 4;
-          break;
-        }
-        default: *out += s_[i_];
-      }
-    }
-    return false;
-  }
-  bool Value(Json* v, int depth) {
-    Space();
-    if (i_ >= s_.size() || depth > 64) return false;
-    const char c = s_[i_];
-    if (c == '{' || c == '[') {
-      v->type = c == '{' ? Json::kObject : Json::kArray;
-      ++i_;
-      Space();
-      if (i_ < s_.size() && s_[i_] == (c == '{' ? '}' : ']')) {
-        ++i_;
-        return true;
-      }
-      while (true) {
-        Space();
-        Json item;
-        std::string key;
-        if (c == '{') {
-          if (i_ >= s_.size() || !String(&key)) return false;
-          Space();
-          if (i_ >= s_.size() || s_[i_++] != ':') return false;
-        }
-        if (!Value(&item, depth + 1)) return false;
-        if (c == '{') {
-          v->members.emplace_back(key, std::move(item));
-        } else {
-          v->items.push_back(std::move(item));
-        }
-        Space();
-        if (i_ >= s_.size()) return false;
-        const char next = s_[i_++];
-        if (next == ',') continue;
-        return next == (c == '{' ? '}' : ']');
-      }
-    }
-    if (c == '"') return v->type = Json::kString, String(&v->text);
-    if (Literal("null")) return v->type = Json::kNull, true;
-    if (Literal("true")) return v->type = Json::kBool, v->number = 1, true;
-    if (Literal("false")) return v->type = Json::kBool, v->number = 0, true;
-    char* end = nullptr;
-    v->number = std::strtod(s_.c_str() + i_, &end);
-    if (end == s_.c_str() + i_) return false;
-    v->type = Json::kNumber;
-    i_ = static_cast<size_t>(end - s_.c_str());
-    return true;
-  }
-  const std::string& s_;
-  size_t i_ = 0;
-};
 
 std::string Num(double v, int digits = 3) {
   char buf[32];
@@ -252,11 +132,16 @@ double ValueIn(const Json& params, const std::string& scenario, const std::strin
   return group ? group->Number(param) : NAN;
 }
 
-// The params of a selected effect in gap.json, or nullptr.
-const Json* FittedParams(const Json& root, const std::string& effect) {
-  if (const Json* selected = root.Find("selected"))
-    for (const Json& e : selected->items)
-      if (const Json* name = e.Find("name"); name && name->text == effect) return e.Find("params");
+// The params of a selected effect in gap.json, or nullptr; with `fitted`, where it is not
+// selected, those of its fit in `effects`.
+const Json* FittedParams(const Json& root, const std::string& effect, bool fitted = false) {
+  for (const char* list : {"selected", "effects"}) {
+    if (const Json* l = root.Find(list))
+      for (const Json& e : l->items)
+        if (const Json* name = e.Find("name"); name && name->text == effect)
+          return e.Find("params");
+    if (!fitted) break;
+  }
   return nullptr;
 }
 bool Selected(const Json& root, const std::string& effect) {
@@ -346,7 +231,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
   o.truth = truth;
   o.unexplained = "-";
   Json root, reference;
-  if (!Parser(gap_json).Parse(&root) || root.type != Json::kObject) {
+  if (!ParseJson(gap_json, &root) || root.type != Json::kObject) {
     o.why = "gap.json does not parse";
     return o;
   }
@@ -357,7 +242,7 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
     return o;
   }
   if (on_reference &&
-      (!Parser(reference_json).Parse(&reference) || reference.type != Json::kObject)) {
+      (!ParseJson(reference_json, &reference) || reference.type != Json::kObject)) {
     o.why = "the reference's gap.json does not parse";
     return o;
   }
@@ -490,13 +375,18 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
         // Per scenario: the scenario's values; per light: its light's.
         const std::string key = params.Find(sc) ? sc : LightOf(sc);
         double got_v = ValueIn(params, sc, axis.param);
-        if (on_reference && Selected(reference, in.effect)) {
-          // What the injection moved: less the real table's own size of it.
-          const Json* ref = FittedParams(reference, in.effect);
-          const double own = ref ? ValueIn(*ref, sc, axis.param) : NAN;
+        const Json* ref = on_reference ? FittedParams(reference, in.effect, true) : nullptr;
+        if (ref && !axis.discrete) {
+          // What the injection moved: less the real table's own size of it, as the table's own
+          // diagnosis fits it, selected or below its limit; against one shared answer, the
+          // mean of that fit over the scenarios.
+          double own = 0;
+          for (const std::string& s : grouped ? std::set<std::string>{sc} : scenarios)
+            own += ValueIn(*ref, s, axis.param) / (grouped ? 1.0 : scenarios.size());
           // A scale composes by product: (1 + s₀)(1 + s) = 1 + fitted.
-          got_v = in.effect == "depth_scale" ? (1 + got_v) / (1 + own) - 1
-                                             : got_v - own + axis.neutral;
+          if (std::isfinite(own))
+            got_v = in.effect == "depth_scale" ? (1 + got_v) / (1 + own) - 1
+                                               : got_v - own + axis.neutral;
         }
         double err = std::fabs(got_v - t.value) / scale;
         if (axis.discrete) err = got_v == t.value ? 0.0 : INFINITY;

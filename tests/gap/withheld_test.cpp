@@ -149,10 +149,10 @@ TEST(Criteria, EachWrongAnswerFails) {
                   .pass);
 }
 
-// On a real table the judge reads what the injection moved against the table as it was: an
-// effect the real table's own diagnosis selects is subtracted, one it does not is no effect;
-// the shrink is the injected part's; an effect below the table's limit may go unseen only where
-// the published limit says so.
+// On a real table the judge reads what the injection moved against the table as it was: the
+// real table's own diagnosis's fit of an injected effect, selected or below its limit, is
+// subtracted; the shrink is the injected part's; an effect below the table's limit may go
+// unseen only where the published limit says so.
 TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   WithheldCase c = Offset();
   c.on_real = true;
@@ -198,6 +198,29 @@ TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   EXPECT_FALSE(JudgeCase(table(offset + "0.21}}, " + tilt, 10, 8.6), c, Rows(), reference)
                    .pass)
       << "a tilt the real table does not hold";
+  // A law the real table's own diagnosis fits below its limit is the table's too: its fit in
+  // `effects` is subtracted; one shared answer is read against its mean over the scenarios.
+  auto below = [&](const std::string& scope, const std::string& params) {
+    return table("", 7, 8).insert(1, "\n  \"effects\": [{\"name\": \"disparity_offset\", "
+                                     "\"scope\": \"" + scope + "\", \"params\": " + params +
+                                     "}],");
+  };
+  const std::string own_shared = below("shared", "{\"delta_px\": 0.1}");
+  EXPECT_TRUE(JudgeCase(table(offset + "0.31}}", 10, 8.6), c, Rows(), own_shared).pass);
+  EXPECT_FALSE(JudgeCase(table(offset + "0.21}}", 10, 8.6), c, Rows(), own_shared).pass);
+  // +0.3 and −0.1 px, scenario by scenario (mean +0.1): a shared 0.3 moved 0.2 in the mean,
+  // where read scenario by scenario it would have moved 0 and 0.4 px.
+  const std::string own_each =
+      below("per_scenario",
+            "{\"daylight/HA\": {\"delta_px\": 0.3}, \"sunset/HA\": {\"delta_px\": -0.1}}");
+  EXPECT_TRUE(JudgeCase(table(offset + "0.3}}", 10, 8.6), c, Rows(), own_each).pass);
+  // Answered per scenario, each scenario's own is subtracted: 0.5 and 0.1 both moved 0.2.
+  const std::string each =
+      "{\"name\": \"disparity_offset\", \"scope\": \"per_scenario\", \"params\": "
+      "{\"daylight/HA\": {\"delta_px\": 0.5}, \"sunset/HA\": {\"delta_px\": 0.1}}}";
+  EXPECT_TRUE(JudgeCase(table(each, 10, 8.6), c, Rows(), own_each).pass);
+  EXPECT_FALSE(JudgeCase(table(each, 10, 8.6), c, Rows(), reference).pass)
+      << "0.5 px for 0.2 without the table's own";
   // A scale composes by product: 1.1 × 1.1 = 1.21.
   WithheldCase scale;
   scale.on_real = true;
