@@ -147,11 +147,13 @@ struct CaseOutcome {
 // reference_json (on_real cases, and only those): the diagnosis of the real table as it was.
 // What it selects is the table's: an effect it selects that was not injected is no wrong
 // answer. An injected effect is read as what the injection moved: the fitted value less the
-// reference's own fit of that effect, selected or not (a law below the table's limit is still
-// the table's: on the article the depth scale fits +3.1 % unselected, and an injected +15.2 %
-// reads +18.4 %); a depth scale by ratio, (1 + s)/(1 + s₀) − 1; against one shared answer,
-// the reference's mean over the scenarios (its per-scenario fits of a law it does not select
-// scatter far beyond their mean: the article's offset +0.24 to −0.37 px). The shrink is
+// reference's own fit of that effect, where it selects it, or, where it selects nothing, its
+// fit alone (a law below the table's limit is still the table's: on the article the depth
+// scale fits +3.1 % and an injected +15.2 % reads +18.4 %; beside a selection a law's fit alone
+// also takes what a correlated kept law holds, and none is subtracted); a depth scale by
+// ratio, (1 + s)/(1 + s₀) − 1; against one shared answer, the reference's mean over the
+// scenarios (its per-scenario fits of a law it does not select scatter far beyond their mean:
+// the article's offset +0.24 to −0.37 px). The shrink is
 // the share of the injected part of the nested held-out gap that the selection, simulated,
 // removes beyond what the reference's removes: 100 · ((B − S) − (B₀ − S₀)) / (B − B₀), B and S
 // the nested baseline and simulated gaps over the cells both hold out, all in the injected

@@ -132,16 +132,16 @@ double ValueIn(const Json& params, const std::string& scenario, const std::strin
   return group ? group->Number(param) : NAN;
 }
 
-// The params of a selected effect in gap.json, or nullptr; with `fitted`, where it is not
-// selected, those of its fit in `effects`.
-const Json* FittedParams(const Json& root, const std::string& effect, bool fitted = false) {
-  for (const char* list : {"selected", "effects"}) {
-    if (const Json* l = root.Find(list))
-      for (const Json& e : l->items)
-        if (const Json* name = e.Find("name"); name && name->text == effect)
-          return e.Find("params");
-    if (!fitted) break;
-  }
+// The params of a selected effect in gap.json, or nullptr. With `alone`, where the diagnosis
+// selects nothing, those of the effect's fit alone in `effects`: beside the calibration, which
+// is all it keeps. (Beside a selection, a law's fit alone also takes what a correlated kept law
+// holds: on the field campaign, whose own offset is kept, a depth scale alone fits +5.4 %.)
+const Json* FittedParams(const Json& root, const std::string& effect, bool alone = false) {
+  const Json* list = root.Find("selected");
+  if (alone && (!list || list->empty())) list = root.Find("effects");
+  if (list)
+    for (const Json& e : list->items)
+      if (const Json* name = e.Find("name"); name && name->text == effect) return e.Find("params");
   return nullptr;
 }
 bool Selected(const Json& root, const std::string& effect) {
@@ -378,8 +378,8 @@ CaseOutcome JudgeCase(const std::string& gap_json, const WithheldCase& truth,
         const Json* ref = on_reference ? FittedParams(reference, in.effect, true) : nullptr;
         if (ref && !axis.discrete) {
           // What the injection moved: less the real table's own size of it, as the table's own
-          // diagnosis fits it, selected or below its limit; against one shared answer, the
-          // mean of that fit over the scenarios.
+          // diagnosis fits it, selected, or alone where it selects nothing (a law below its
+          // limit); against one shared answer, the mean of that fit over the scenarios.
           double own = 0;
           for (const std::string& s : grouped ? std::set<std::string>{sc} : scenarios)
             own += ValueIn(*ref, s, axis.param) / (grouped ? 1.0 : scenarios.size());

@@ -23,6 +23,7 @@
 #include "gap/cases.h"
 #include "gap/design.h"
 #include "gap/diagnose.h"
+#include "gap/json_read.h"
 #include "gap/report.h"
 #include "io/metrics_csv.h"
 #include "support/article.h"
@@ -95,6 +96,39 @@ std::string NestedCells(double baseline, double simulated, double unit) {
   return NestedCells(rows);
 }
 
+// gap.json read back: values, escapes and nesting as the writer makes them; anything malformed,
+// cut short, nested beyond 64 levels or followed by more is refused, and a judge given such a
+// file fails the case saying so.
+TEST(JsonRead, ReadsWhatTheWriterMakesAndRefusesTheRest) {
+  JsonValue v;
+  ASSERT_TRUE(ParseJson(" {\"a\": [1, -2.5e-1, true, false, null], \"s\": \"x\\n\\u0041\\\"\","
+                        " \"o\": {}} \n", &v));
+  ASSERT_EQ(v.type, JsonValue::kObject);
+  const JsonValue* a = v.Find("a");
+  ASSERT_TRUE(a && a->type == JsonValue::kArray && a->items.size() == 5u);
+  EXPECT_EQ(a->items[1].number, -0.25);
+  EXPECT_EQ(a->items[2].type, JsonValue::kBool);
+  EXPECT_TRUE(a->items[4].empty());
+  EXPECT_EQ(v.Find("s")->text, "x\nA\"");
+  EXPECT_TRUE(v.Find("o")->empty());
+  EXPECT_TRUE(std::isnan(v.Number("s")));
+  EXPECT_EQ(v.Find("missing"), nullptr);
+  std::string deep(64, '['), deeper(66, '[');
+  deep += std::string(64, ']');
+  deeper += std::string(66, ']');
+  EXPECT_TRUE(ParseJson(deep, &v));
+  for (const std::string& bad :
+       {std::string(""), std::string("{"), std::string("{\"a\": }"), std::string("[1,]"),
+        std::string("{\"a\" 1}"), std::string("\"open"), std::string("{} {}"),
+        std::string("nul"), std::string("[1 2]"), std::string("\"\\u00\""), deeper}) {
+    JsonValue w;
+    EXPECT_FALSE(ParseJson(bad, &w)) << bad;
+  }
+  const CaseOutcome o = JudgeCase("{\"selected\": [", WithheldCase(), Rows());
+  EXPECT_FALSE(o.pass);
+  EXPECT_EQ(o.why, "gap.json does not parse");
+}
+
 TEST(Criteria, TheRightAnswerPasses) {
   const CaseOutcome o = JudgeCase(
       Json("{\"name\": \"disparity_offset\", \"scope\": \"shared\", \"params\": {\"delta_px\": "
@@ -150,9 +184,9 @@ TEST(Criteria, EachWrongAnswerFails) {
 }
 
 // On a real table the judge reads what the injection moved against the table as it was: the
-// real table's own diagnosis's fit of an injected effect, selected or below its limit, is
-// subtracted; the shrink is the injected part's; an effect below the table's limit may go
-// unseen only where the published limit says so.
+// real table's own diagnosis's fit of an injected effect, selected, or alone where it selects
+// nothing, is subtracted; the shrink is the injected part's; an effect below the table's
+// limit may go unseen only where the published limit says so.
 TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   WithheldCase c = Offset();
   c.on_real = true;
@@ -198,12 +232,14 @@ TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   EXPECT_FALSE(JudgeCase(table(offset + "0.21}}, " + tilt, 10, 8.6), c, Rows(), reference)
                    .pass)
       << "a tilt the real table does not hold";
-  // A law the real table's own diagnosis fits below its limit is the table's too: its fit in
-  // `effects` is subtracted; one shared answer is read against its mean over the scenarios.
-  auto below = [&](const std::string& scope, const std::string& params) {
-    return table("", 7, 8).insert(1, "\n  \"effects\": [{\"name\": \"disparity_offset\", "
-                                     "\"scope\": \"" + scope + "\", \"params\": " + params +
-                                     "}],");
+  // A law the real table's own diagnosis fits below its limit, selecting nothing, is the
+  // table's too: its fit alone in `effects` is subtracted; one shared answer is read against
+  // its mean over the scenarios.
+  auto below = [&](const std::string& scope, const std::string& params,
+                   const std::string& selected = "") {
+    return table(selected, 7, 8)
+        .insert(1, "\n  \"effects\": [{\"name\": \"disparity_offset\", \"scope\": \"" +
+                       scope + "\", \"params\": " + params + "}],");
   };
   const std::string own_shared = below("shared", "{\"delta_px\": 0.1}");
   EXPECT_TRUE(JudgeCase(table(offset + "0.31}}", 10, 8.6), c, Rows(), own_shared).pass);
@@ -221,6 +257,10 @@ TEST(Criteria, OnARealTableTheInjectedPartIsJudged) {
   EXPECT_TRUE(JudgeCase(table(each, 10, 8.6), c, Rows(), own_each).pass);
   EXPECT_FALSE(JudgeCase(table(each, 10, 8.6), c, Rows(), reference).pass)
       << "0.5 px for 0.2 without the table's own";
+  // Beside a selection a law's fit alone also takes what a kept law holds: not the table's.
+  const std::string beside = below("shared", "{\"delta_px\": 0.1}", tilt);
+  EXPECT_TRUE(JudgeCase(table(offset + "0.21}}, " + tilt, 10, 8.6), c, Rows(), beside).pass);
+  EXPECT_FALSE(JudgeCase(table(offset + "0.31}}, " + tilt, 10, 8.6), c, Rows(), beside).pass);
   // A scale composes by product: 1.1 × 1.1 = 1.21.
   WithheldCase scale;
   scale.on_real = true;
