@@ -346,4 +346,26 @@ bool Folds(const Design& d, const Holdout& h, std::vector<int>* fold, int* num_f
   return true;
 }
 
+std::vector<int> FactorLevels(const Design& d, Factor factor, int* count) {
+  std::map<std::string, int> ids;
+  std::vector<std::string> key(d.cells.size());
+  for (size_t c = 0; c < d.cells.size(); ++c) {
+    const sim::Cell& cell = d.cells[c];
+    switch (factor) {
+      case Factor::kLight: key[c] = cell.light; break;
+      case Factor::kDistance: key[c] = std::to_string(cell.distance_m); break;
+      case Factor::kAngle: key[c] = std::to_string(cell.angle_deg); break;
+      case Factor::kPreset: key[c] = cell.preset; break;
+      case Factor::kEmitter: key[c] = cell.emitter_on ? "on" : "off"; break;
+    }
+    ids.emplace(key[c], 0);
+  }
+  int i = 0;
+  for (auto& [k, id] : ids) id = i++;
+  if (count) *count = i;
+  std::vector<int> out;
+  for (const auto& k : key) out.push_back(ids.at(k));
+  return out;
+}
+
 }  // namespace depthbias::gap

@@ -82,6 +82,13 @@ struct Design {
   int num_lights() const { return static_cast<int>(light_names.size()); }
 };
 
+// The five factors of a table's cells.
+enum class Factor { kLight, kDistance, kAngle, kPreset, kEmitter };
+
+// Each cell's level of a factor, 0 … L − 1 in the order of the levels' text (a distance or
+// angle as std::to_string gives it, "on" / "off"); L into *count when given.
+std::vector<int> FactorLevels(const Design& design, Factor factor, int* count = nullptr);
+
 // What a row must be for the simulator to stand for it, from the sensor (DesignRulesOf). A row
 // outside is left out of the design and listed with its reason (ScreenRows): never simulated
 // with a guessed noise, never silently dropped.

@@ -421,16 +421,9 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
       o << "| " << f.held << " | " << f.cells << " | " << (sel.empty() ? "none" : sel) << " | "
         << Num(f.deviance_calibrated) << " → " << Num(f.deviance_selected) << " |\n";
     }
-    o << "\n| held-out gap | all metrics |";
-    for (int k = 0; k < kk; ++k) o << " " << r.metric_names[k] << " |";
-    o << "\n|---|---|";
-    for (int k = 0; k < kk; ++k) o << "---|";
-    o << "\n";
+    o << "\n" << GapTableHeader("held-out gap", r.metric_names);
     auto row = [&](const std::string& name, const GapStat& g) {
-      o << "| " << name << " | " << Num(g.overall) << " |";
-      for (int k = 0; k < kk && k < static_cast<int>(g.mean_sq.size()); ++k)
-        o << " " << Num(g.mean_sq[k]) << " |";
-      o << "\n";
+      o << GapTableRow(name, g, r.metric_names.size());
     };
     row("baseline", n.baseline);
     row("calibrated", n.calibrated);

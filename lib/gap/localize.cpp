@@ -2,34 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 
 #include <Eigen/Dense>
 
 namespace depthbias::gap {
 namespace {
-
-// Level of every cell for a factor (0 … L − 1).
-std::vector<int> Levels(const Design& d, int factor) {
-  std::map<std::string, int> ids;
-  std::vector<std::string> key(d.cells.size());
-  for (size_t c = 0; c < d.cells.size(); ++c) {
-    const sim::Cell& cell = d.cells[c];
-    switch (factor) {
-      case 0: key[c] = std::to_string(cell.distance_m); break;
-      case 1: key[c] = std::to_string(cell.angle_deg); break;
-      case 2: key[c] = cell.preset; break;
-      case 3: key[c] = cell.light; break;
-      default: key[c] = cell.emitter_on ? "on" : "off"; break;
-    }
-    ids.emplace(key[c], 0);
-  }
-  int i = 0;
-  for (auto& [k, id] : ids) id = i++;
-  std::vector<int> out;
-  for (const auto& k : key) out.push_back(ids.at(k));
-  return out;
-}
 
 // Indicator columns (levels 1 … L − 1) of a factor, over the given cells.
 Eigen::MatrixXd Indicators(const std::vector<int>& level, const std::vector<int>& cells) {
@@ -110,8 +87,10 @@ Localization Localize(const Design& d, const std::vector<double>& z, double alph
   Localization loc;
   constexpr int kFactors = 5;
   const char* names[kFactors] = {"distance", "angle", "preset", "light", "emitter"};
+  const Factor factors[kFactors] = {Factor::kDistance, Factor::kAngle, Factor::kPreset,
+                                    Factor::kLight, Factor::kEmitter};
   std::vector<std::vector<int>> level;
-  for (int f = 0; f < kFactors; ++f) level.push_back(Levels(d, f));
+  for (int f = 0; f < kFactors; ++f) level.push_back(FactorLevels(d, factors[f]));
   loc.terms.push_back("offset");
   for (int f = 0; f < kFactors; ++f) loc.terms.push_back(names[f]);
   std::vector<std::pair<int, int>> pairs;

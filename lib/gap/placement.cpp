@@ -20,29 +20,6 @@ double StudentCritical(double z, double nu) {
          (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * nu * nu * nu);
 }
 
-// Level of every cell for a factor (0: light, 1: distance, 2: angle, 3: preset, 4: emitter).
-std::vector<int> Levels(const Design& d, int factor, int* count) {
-  std::map<std::string, int> ids;
-  std::vector<std::string> key(d.cells.size());
-  for (size_t c = 0; c < d.cells.size(); ++c) {
-    const sim::Cell& cell = d.cells[c];
-    switch (factor) {
-      case 0: key[c] = cell.light; break;
-      case 1: key[c] = std::to_string(cell.distance_m); break;
-      case 2: key[c] = std::to_string(cell.angle_deg); break;
-      case 3: key[c] = cell.preset; break;
-      default: key[c] = cell.emitter_on ? "on" : "off"; break;
-    }
-    ids.emplace(key[c], 0);
-  }
-  int i = 0;
-  for (auto& [k, id] : ids) id = i++;
-  *count = i;
-  std::vector<int> out;
-  for (const auto& k : key) out.push_back(ids.at(k));
-  return out;
-}
-
 // Columns of the fixed effects for the listed cells: a common offset, the main effects and the
 // two-factor interactions of the five factors (indicator coding) but light × angle, and distance
 // × angle as the two laws D·(1 − cos α) and D²·(1 − cos α) (FixedEffectsWith), reduced to full
@@ -94,7 +71,8 @@ Eigen::MatrixXd FixedEffectsWith(const Design& d, const std::vector<int>& cells,
                                  bool distance_angle) {
   std::vector<std::vector<int>> level(5);
   std::vector<int> count(5);
-  for (int f = 0; f < 5; ++f) level[f] = Levels(d, f, &count[f]);
+  // 0: light, 1: distance, 2: angle, 3: preset, 4: emitter (Factor's order).
+  for (int f = 0; f < 5; ++f) level[f] = FactorLevels(d, static_cast<Factor>(f), &count[f]);
   const int n = static_cast<int>(cells.size());
   std::vector<Eigen::VectorXd> cols;
   cols.push_back(Eigen::VectorXd::Ones(n));

@@ -13,6 +13,8 @@ namespace depthbias::gap {
 namespace {
 
 using text::Num;
+using text::GapTableHeader;
+using text::GapTableRow;
 using text::Pct;
 using text::ParamsText;
 
@@ -558,15 +560,9 @@ std::string GapMarkdown(const DiagnoseResult& r, const DiagnoseParams& p,
     o << "\n";
   }
 
-  o << "\n## 4. How far\n\n| gap | all metrics |";
-  for (int k = 0; k < kk; ++k) o << " " << r.metric_names[k] << " |";
-  o << "\n|---|---|";
-  for (int k = 0; k < kk; ++k) o << "---|";
-  o << "\n";
+  o << "\n## 4. How far\n\n" << GapTableHeader("gap", r.metric_names);
   auto row = [&](const std::string& name, const GapStat& g) {
-    o << "| " << name << " | " << Num(g.overall) << " |";
-    for (int k = 0; k < kk; ++k) o << " " << Num(g.mean_sq[k]) << " |";
-    o << "\n";
+    o << GapTableRow(name, g, r.metric_names.size());
   };
   row("baseline (configured sensor)", r.baseline);
   row("calibrated base", r.calibration_in);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "gap/diagnose.h"
 
@@ -26,6 +27,23 @@ inline std::string Pct(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.1f %%", v);
   return buf;
+}
+
+// A Markdown table of gaps, mean z² over all metrics and per compared metric: its header (first
+// column `first`), then one row a GapStat.
+inline std::string GapTableHeader(const std::string& first,
+                                  const std::vector<std::string>& metrics) {
+  std::string h = "| " + first + " | all metrics |";
+  for (const std::string& m : metrics) h += " " + m + " |";
+  h += "\n|---|---|";
+  for (size_t k = 0; k < metrics.size(); ++k) h += "---|";
+  return h + "\n";
+}
+inline std::string GapTableRow(const std::string& name, const GapStat& g, size_t metrics) {
+  std::string row = "| " + name + " | " + Num(g.overall) + " |";
+  for (size_t k = 0; k < metrics && k < g.mean_sq.size(); ++k)
+    row += " " + Num(g.mean_sq[k]) + " |";
+  return row + "\n";
 }
 
 // A term's parameters: "p v, q w" (per scenario "S: …; T: …"), with 95 % intervals and a
