@@ -48,7 +48,8 @@ constexpr char kUsage[] =
     "  --candidates LIST    all, or registry effects separated by commas (all)\n"
     "  --holdout H          distance, point, light=V or preset=V (distance)\n"
     "  --seed S             seed of the simulation (1; --cases: tables at S + 999 + i,\n"
-    "                       tables without effect at S + 1999 + i)\n"
+    "                       tables without effect at 2000 + 20(S - 1) + i, on a user's\n"
+    "                       design at 10^9 + 20(S - 1) + i)\n"
     "  --frames N           simulated frames per cell, 1 to 100000 (10)\n"
     "  --threads N          cells simulated in parallel, 1 to 256 (all cores)\n"
     "  --cache DIR          keep the table's simulations in DIR, and take them from there\n"
@@ -66,7 +67,8 @@ constexpr char kUsage[] =
     "  --joint-window       effects that move the panel's window through the measured\n"
     "                       depth read it at their joint depth, not each at its own (off)\n"
     "  --case NAME          --cases: only this case (as named in the table's first column;\n"
-    "                       repeatable; \"no effect\" for the 20 null tables)\n"
+    "                       repeatable; \"no effect\" for the 20 null tables, \"no effect,\n"
+    "                       user's unit\" for 20 of 32 rows)\n"
     "  --field FILE         --cases: also judge this table of field bags (panel_extract on\n"
     "                       scripts/make_field_campaign.py's bags, offset -0.25 px)\n"
     "  --inject-into FILE   --cases: also judge effects injected by their physics into this\n"
@@ -214,14 +216,14 @@ int main(int argc, char** argv) {
                          }(),
                          4e6);
 
-    if (cases) {  // tables at seeds S + 999 + i, the null suite at S + 1999 + i
+    if (cases) {  // tables at seeds S + 999 + i, the null suites at gap::NullTableSeed(S)
       const std::vector<gap::WithheldCase> all = gap::DefaultWithheldCases();
       std::vector<int> only;  // --case: those named (their seeds as in the whole suite)
       std::vector<std::string> only_real;  // --inject-into's cases named
-      bool nulls_too = only_cases.empty();
+      bool nulls_too = only_cases.empty(), unit_nulls_too = only_cases.empty();
       for (const std::string& name : only_cases) {
-        if (name == "no effect") {
-          nulls_too = true;
+        if (name == "no effect" || name == "no effect, user's unit") {
+          (name == "no effect" ? nulls_too : unit_nulls_too) = true;
           continue;
         }
         const auto it = std::find_if(all.begin(), all.end(),
@@ -275,15 +277,20 @@ int main(int argc, char** argv) {
                        "diagnose_gap: '%s' not injected: on its table that effect's limit lies "
                        "beyond its grid\n",
                        name.c_str());
-      const std::vector<gap::CaseOutcome> nulls =
-          nulls_too ? gap::RunWithheldCases(base, gap::NullCases(20), params, base.seed + 1999)
-                    : std::vector<gap::CaseOutcome>{};
-      const std::string table = gap::FormatCases(outcomes, nulls);
+      auto null_suite = [&](bool run, bool unit) {
+        return run ? gap::RunWithheldCases(base, gap::NullCases(20, unit), params,
+                                           gap::NullTableSeed(base.seed, unit))
+                   : std::vector<gap::CaseOutcome>{};
+      };
+      const std::vector<gap::CaseOutcome> nulls = null_suite(nulls_too, false);
+      const std::vector<gap::CaseOutcome> unit_nulls = null_suite(unit_nulls_too, true);
+      const std::string table = gap::FormatCases(outcomes, nulls, unit_nulls);
       std::fputs(table.c_str(), stdout);
       if (!out_dir.empty()) {  // the table, and each case's gap.json in DIR/cases/
         fs::create_directories(fs::path(out_dir) / "cases");
         for (const std::vector<gap::CaseOutcome>* list :
-             std::initializer_list<const std::vector<gap::CaseOutcome>*>{&outcomes, &nulls})
+             std::initializer_list<const std::vector<gap::CaseOutcome>*>{&outcomes, &nulls,
+                                                                         &unit_nulls})
           for (const gap::CaseOutcome& o : *list) {
             std::string name = o.truth.name.empty() ? "field" : o.truth.name;
             for (char& ch : name)

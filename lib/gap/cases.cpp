@@ -146,15 +146,20 @@ WithheldCase FieldCampaignCase() {
   return c;
 }
 
-std::vector<WithheldCase> NullCases(int count) {
+std::vector<WithheldCase> NullCases(int count, bool unit) {
   std::vector<WithheldCase> out;
   for (int i = 0; i < count; ++i) {
     WithheldCase c;
-    c.name = "null " + std::to_string(i);
+    c.name = (unit ? "null unit " : "null ") + std::to_string(i);
     c.family = "null";
+    c.unit = unit;
     out.push_back(c);
   }
   return out;
+}
+
+std::uint64_t NullTableSeed(std::uint64_t suite_seed, bool unit) {
+  return (unit ? 1000000000ull : 2000ull) + 20 * (suite_seed - 1);
 }
 
 sim::ProtocolParams CaseProtocol(const sim::ProtocolParams& base, const WithheldCase& c) {
@@ -266,7 +271,8 @@ bool NullSuitePasses(const std::vector<CaseOutcome>& nulls) {
 }
 
 std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
-                        const std::vector<CaseOutcome>& nulls) {
+                        const std::vector<CaseOutcome>& nulls,
+                        const std::vector<CaseOutcome>& unit_nulls) {
   auto list = [](const std::vector<std::string>& v) {
     std::string s;
     for (const auto& e : v) s += (s.empty() ? "" : ", ") + e;
@@ -296,19 +302,23 @@ std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
                                                 : "-") +
          " | " + o.unexplained + " | " + (o.pass ? "yes" : "**no**") + " | " + o.why + " |\n";
   }
-  if (!nulls.empty()) {
-    int clean = 0;
+  for (const std::vector<CaseOutcome>* list : {&nulls, &unit_nulls}) {
+    if (list->empty()) continue;
+    int clean = 0, quiet = 0;
     std::map<std::string, int> named;
-    for (const CaseOutcome& o : nulls) {
+    for (const CaseOutcome& o : *list) {
       clean += o.pass ? 1 : 0;
+      quiet += o.has_unexplained ? 0 : 1;
       for (const auto& e : o.selected) ++named[e];
     }
     std::string which;
     for (const auto& [e, n] : named) which += (which.empty() ? "" : ", ") + e + " ×" + Num(n);
-    s += "| no effect, " + std::to_string(nulls.size()) + " seeds | none | " +
-         (which.empty() ? "none" : which) + " | - | - | - | - | " +
-         (NullSuitePasses(nulls) ? "yes" : "**no**") + " | " + std::to_string(clean) + " of " +
-         std::to_string(nulls.size()) + " select nothing (19 needed) |\n";
+    const std::string n = std::to_string(list->size());
+    s += std::string("| no effect") + (list == &unit_nulls ? ", user's unit (32 rows)" : "") +
+         ", " + n + " seeds | none | " + (which.empty() ? "none" : which) + " | - | - | - | " +
+         std::to_string(list->size() - quiet) + " of " + n + " name something | " +
+         (NullSuitePasses(*list) ? "yes" : "**no**") + " | " + std::to_string(clean) + " of " +
+         n + " select nothing (19 needed) |\n";
   }
   return s;
 }

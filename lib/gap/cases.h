@@ -116,8 +116,13 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
     const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb,
     double panel_side_m);
 
-// The null suite: no effect, 2 % placement scatter (tables at seeds seed0 + i).
-std::vector<WithheldCase> NullCases(int count);
+// The null suite: no effect, 2 % placement scatter (tables at seeds seed0 + i); with `unit`, on a
+// user's design (WithheldCase::unit: one light, one preset, 32 rows), named "null unit i".
+std::vector<WithheldCase> NullCases(int count, bool unit = false);
+// The first table seed of suite seed S's null tables: 2000 + 20·(S − 1) on the article's design,
+// 10⁹ + 20·(S − 1) on a user's, so that no two suite seeds share a null table (S + 1999 did: the
+// 20 tables of seeds 1–5 were 24 tables, not 100). Case i's table stays at S + 999 + i.
+std::uint64_t NullTableSeed(std::uint64_t suite_seed, bool unit);
 
 // The table of a case: the protocol's cells (the unit's: one light, one preset), each test
 // point placed off by its own range error, the injected effects simulated, the outside effect
@@ -187,9 +192,11 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
                                                const std::vector<std::string>& only = {},
                                                const std::vector<double>& times = {1.5, 0.5});
 
-// The cases as a Markdown table; the null suite summarized in one row when given.
+// The cases as a Markdown table; each null suite summarized in one row when given (how many
+// select nothing, and how many leave something `unexplained`: a false finding of the open world).
 std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
-                        const std::vector<CaseOutcome>& nulls = {});
+                        const std::vector<CaseOutcome>& nulls = {},
+                        const std::vector<CaseOutcome>& unit_nulls = {});
 // At least 19 of 20 (95 %) null tables select nothing.
 bool NullSuitePasses(const std::vector<CaseOutcome>& nulls);
 
