@@ -26,7 +26,9 @@
 //
 // Heavy tail: a test point's departure (its recordings' mean residual about X·β) is read
 // against the law, and against the departures' own robust scale where a tail has inflated the
-// law (1.4826·median |z| < 1). The point farthest beyond p < alpha / test points (Bonferroni) is
+// law (1.4826·median |z| below its own chance low). The point farthest beyond p < alpha / test
+// points (Bonferroni), also at the largest scatter the law's restricted likelihood allows at its
+// distance (a law read from few test points is loose; a flagged point's z is reported there), is
 // flagged and given a free variance in the estimate (its mean informs neither β nor the law; its
 // preset and emitter contrasts still do), the fit is made again, and the search grows one point
 // at a time until no point joins: a misplaced point pulls its distance's effects, and its
