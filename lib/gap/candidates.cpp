@@ -21,21 +21,24 @@ Axis Continuous(const std::string& param, std::vector<double> nodes, double neut
 // small effect is resolved. Gains are interpolated in their logarithm.
 std::vector<Candidate> MakeCandidates() {
   std::vector<Candidate> c;
-  // The offset's node at −1.5 px: the article's rows keep an over-reading offset only from
-  // −0.66 px, and one of 1.5 times that (−0.92 to −0.99 px) was fitted at a grid ending at −1 px,
-  // at its edge. A node at +1.5 px as well moved the 32-row unit's offset fits off their
-  // minimum (a depth scale taken in its place; docs/gap/cases.md).
+  // The offset's nodes at −1.5 and −2 px (the registry's bound): the article's rows keep an
+  // over-reading offset only from −0.54 px, and one of 2 or 3 times that (−1.07, −1.61 px, on
+  // the table's own −0.12) was read −0.95 to −0.97 px on a grid ending at −1.5 px, or named
+  // "one of" with a scale at the scale's edge. A node at +1.5 px as well moved the 32-row unit's
+  // offset fits off their minimum (a depth scale taken in its place; docs/gap/cases.md).
   c.push_back({"disparity_offset",
                {Continuous("delta_px",
-                           {-1.5, -1, -0.5, -0.25, -0.1, -0.04, 0, 0.04, 0.1, 0.25, 0.5, 1}, 0,
-                           0.1)}});
-  // The depth scale's nodes reach ±20 %: the article's rows keep an over-reading scale only from
-  // +10.7 %, and a scale of 1.5 times that (+16 %) injected into them lay beyond a grid that
-  // ended at ±12 %, where it was kept at the edge (0.12) or taken by an offset of −0.74 px.
+                           {-2, -1.5, -1, -0.5, -0.25, -0.1, -0.04, 0, 0.04, 0.1, 0.25, 0.5, 1},
+                           0, 0.1)}});
+  // The depth scale's nodes reach ±35 %: the article's rows keep an over-reading scale only from
+  // +8.6 %, and a scale of 2 or 3 times that (+17 %, +26 %, on the table's own +3 %) lay beyond a
+  // grid ending at ±20 %, where it was named "one of" with an offset and kept nowhere (at
+  // ±12 %, a scale of +16 % was kept at the edge or taken by an offset of −0.74 px).
   c.push_back({"depth_scale",
                {Continuous("scale_rel",
-                           {-0.2, -0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12, 0.2}, 0,
-                           0.02)}});
+                           {-0.35, -0.2, -0.12, -0.05, -0.02, -0.007, 0, 0.007, 0.02, 0.05, 0.12,
+                            0.2, 0.35},
+                           0, 0.02)}});
   c.push_back({"range_vs_depth", {Continuous("weight", {0, 0.15, 0.4, 0.7, 1.0}, 0, 0.5)}});
   for (Candidate& law : c) law.range_law = law.moves_window = true;  // the three above
   // Nodes at ±1 px: between 0.6 and 1.5 px the interpolation crossed a change of regime. The
