@@ -418,9 +418,17 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
     }
     mean_d /= blocks;
     const double rms = std::sqrt(sum_sq / static_cast<double>(rows.size())) + 1e-12;
+    const bool two = metric == kMedianBias;
+    const double scale_b = rms / std::max(mean_d, 1e-3);
+    // The scatter block j is judged at under the law (la, lb): the largest its likelihood allows
+    // there, not below the point's floor.
+    auto tau_up = [&](int j, double la, double lb) {
+      return std::max(TauUpper(r, j, la, lb, two, rms, scale_b),
+                      pe.Floor(k, pe.point_distance_m[block_point[j]]));
+    };
     double a = 0, b = 0;
     for (int iter = 0; iter < 12; ++iter) {
-      FitLaw(r, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3), &a, &b);
+      FitLaw(r, two, rms, scale_b, &a, &b);
       Eigen::VectorXd beta;
       Eigen::MatrixXd c_inv;
       r.Objective(a, b, &beta, &c_inv);
@@ -477,10 +485,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
       int worst = -1;
       for (int j : beyond) {
         const int t = block_point[j];
-        const double up = std::max(
-            TauUpper(r, j, a, b, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3)),
-            pe.Floor(k, pe.point_distance_m[t]));
-        const double var = r.VarWith(j, up, c_inv, false);
+        const double var = r.VarWith(j, tau_up(j, a, b), c_inv, false);
         if (var > 0 && std::fabs(pe.departure[k][t]) / std::sqrt(var) / z_scale > z_crit) {
           worst = j;
           break;
@@ -504,7 +509,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
         if (top >= 0 && FlaggedBlocks(flag, block_point) == 0 && blocks > 3) {
           r.free_tau[top] = 1e3 * rms;
           double ta = 0, tb = 0;
-          FitLaw(r, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3), &ta, &tb);
+          FitLaw(r, two, rms, scale_b, &ta, &tb);
           Eigen::VectorXd tbeta;
           Eigen::MatrixXd tc_inv;
           r.Objective(ta, tb, &tbeta, &tc_inv);
@@ -517,12 +522,9 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
           // of one parameter). And it is read at the largest scatter their likelihood allows at
           // this point's distance (TauUpper: the shape of a law of two is loose too). Both.
           int points = 0;
-          const int dof = ScatterDof(x, d, rows, &points) - 1 - (metric == kMedianBias ? 2 : 1);
+          const int dof = ScatterDof(x, d, rows, &points) - 1 - (two ? 2 : 1);
           auto beyond_bound = [&] {
-            const double up = std::max(TauUpper(r, top, ta, tb, metric == kMedianBias, rms,
-                                                rms / std::max(mean_d, 1e-3)),
-                                       pe.Floor(k, pe.point_distance_m[block_point[top]]));
-            const double var_up = r.VarWith(top, up, tc_inv, true);
+            const double var_up = r.VarWith(top, tau_up(top, ta, tb), tc_inv, true);
             return var_up > 0 && std::fabs(m) / std::sqrt(var_up) > z_crit;
           };
           if (dof >= 3 && var > 0 && std::fabs(m) / std::sqrt(var) > StudentCritical(z_crit, dof) &&
@@ -543,7 +545,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
     // point's departure read as predicted from them: a point flagged while it was still in the
     // fit had part of its departure taken up by the effects it shares.
     if (FlaggedBlocks(flag, block_point) > 0) {
-      FitLaw(r, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3), &a, &b);
+      FitLaw(r, two, rms, scale_b, &a, &b);
       Eigen::VectorXd beta;
       Eigen::MatrixXd c_inv;
       r.Objective(a, b, &beta, &c_inv);
@@ -556,10 +558,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
                                      true, &var, &own);
         pe.departure[k][t] = m;
         // Its z as it was judged: at the largest scatter the others' likelihood allows there.
-        const double up = std::max(
-            TauUpper(r, j, a, b, metric == kMedianBias, rms, rms / std::max(mean_d, 1e-3)),
-            pe.Floor(k, pe.point_distance_m[t]));
-        var = r.VarWith(j, up, c_inv, true);
+        var = r.VarWith(j, tau_up(j, a, b), c_inv, true);
         pe.departure_z[k][t] = var > 0 ? m / std::sqrt(var) : 0.0;
       }
     }

@@ -670,12 +670,6 @@ void ExpectPassingWithNothingSelected(const std::string& name, std::uint64_t see
     EXPECT_NE(out[0].gap_json.find(text), std::string::npos) << text;
 }
 
-// The open world before a registered cause: a far over-read of 0.5 m from 12 m on (no registered
-// effect is a step in distance) at a seed where a disparity offset passes the outer folds' guards
-// and would be kept in its place (seed 5; at seed 2, where it was kept once the window's metrics
-// were smoothed, the guards now drop it themselves). The calibrated base's median bias departs
-// as a step from 12 m, so no range law is kept; the step is what `unexplained` names. Without
-// that rule this case selects disparity_offset and fails.
 // No two seeds of the suite share a null table, on either design, nor a case's table (cases at
 // S + 999 + i, i < 64). With S + 1999 + i, seeds 1–5 drew 24 null tables, not 100.
 TEST(CaseTables, NoTwoSuiteSeedsShareANullTable) {
@@ -711,6 +705,12 @@ TEST(Cases, OnAUsersDesignTablesWithoutEffectSelectNothing) {
   EXPECT_TRUE(NullSuitePasses(nulls)) << FormatCases({}, {}, nulls);
 }
 
+// The open world before a registered cause: a far over-read of 0.5 m from 12 m on (no registered
+// effect is a step in distance) at a seed where a disparity offset passes the outer folds' guards
+// and would be kept in its place (seed 5; at seed 2, where it was kept once the window's metrics
+// were smoothed, the guards now drop it themselves). The calibrated base's median bias departs
+// as a step from 12 m, so no range law is kept; the step is what `unexplained` names. Without
+// that rule this case selects disparity_offset and fails.
 TEST(Cases, AFarStepIsNotPinnedOnARangeLaw) {
   ExpectPassingWithNothingSelected("far over-read of 0.5 m from 12 m on (outside)", 5,
                                    {"which no range law gives"});
