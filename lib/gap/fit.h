@@ -6,6 +6,7 @@
 // For an observation (cell c, compared metric k) with real value y and base simulation b:
 //   μ = b + Σ_terms Δ_term(θ_term,g(c)) + J_σ·n_σ,s(c) + J_p·n_p,s(c)  [+ (1a)]          (1)
 //   r = L⁻¹ (y − μ),   L Lᵀ = φ_k · diag(σ²) + ψ_k · τ_k(D_t)² · l lᵀ                      (2)
+//   and between metrics k ≠ k' of one test point √(ψ_k ψ_k') · τ_k τ_k' · g_k g_k' · l l'ᵀ
 // Δ_term is the term's simulated departure from the base, interpolated between grid nodes; g(c)
 // the term's group of the cell (one shared group, the cell's light or its scenario: Scope); n_s
 // the scenario's calibration moves (Δ log σ_d, Δ logit p), linear through the Jacobian J
@@ -14,11 +15,13 @@
 // share (placement.h: one random effect per test point and metric, so the recordings of one
 // placement count as one piece of evidence, not four), l its loadings (1 but for a spread, whose
 // recordings take the displacement by their own scenario's sensitivity: tau_cell), and φ_k,
-// ψ_k the metric's dispersions
+// g_k the share of the metric's scatter that is the panel's displacement the median reads
+// (PlacementEstimate::Shared: FitSettings::joint_placement), ψ_k the metric's dispersions
 // (how much wider than the replicate noise the recordings of one test point spread about their
 // mean, and how much wider than the placement law the test points' means spread, each ≥ 1:
-// select.h, Dispersion); the residuals are whitened block by block
-// (test point × metric). Effects of several terms add (in the metrics' own scales).
+// select.h, Dispersion); the residuals are whitened block by block (test point × metric, the
+// metrics with a share g ≠ 0 in one block per test point). Effects of several terms add (in the
+// metrics' own scales).
 // Ceres minimizes the deviance
 //   D = Σ 2ρ(r) + Σ_s (n_σ,s/τ_σ)² + (n_p,s/τ_p)²                                     (3)
 // with ρ Huber's loss at k (plain squares for k ≤ 0): the calibration may move, at a cost set by
@@ -46,6 +49,12 @@ struct FitSettings {
   // false: each one's window departures add, as every other metric's (the default: docs/gap/
   // cases.md, The window at the joint depth).
   bool joint_window = false;
+  // One displacement read in every metric it moves: a test point's median and spreads share the
+  // panel's displacement along its line of sight (PlacementEstimate::Shared), so that a spread
+  // that does not follow its median's departure is read against what is left of its scatter,
+  // not against all of it (2). false (the default): each metric's scatter its own; the rule on
+  // a range law and the spreads reads the table with it (select.h, MedianWithoutSpreads).
+  bool joint_placement = false;
 
   bool IsValid(std::string* why) const;
 };
@@ -169,6 +178,12 @@ class GapModel {
   void SetAbsorbs(int candidate, int mask) { absorbs_[candidate] = mask; }
   int Absorbs(int candidate) const { return absorbs_[candidate]; }
   int Frozen(const std::vector<Term>& terms) const;
+  // The same model with a candidate's departures in the spreads (mean − median, plane_std,
+  // temporal_std) held at the base, every other metric's kept: its law without what it does to
+  // the spreads (select.h, MedianWithoutSpreads).
+  GapModel WithoutSpreads(int candidate) const;
+  // The same model with FitSettings::joint_placement on.
+  GapModel JointPlacement() const;
 
   int NumGroups(const Term& term) const;
   int Group(const Term& term, int cell) const;
@@ -216,6 +231,7 @@ class GapModel {
   FitSettings settings_;
   std::vector<double> y_, sigma_, total_, phi_;
   std::vector<int> block_;  // [obs] its test point (−1: a block of its own)
+  std::vector<double> shared_;  // [obs] g of (2): its scatter's share the displacement is
   std::vector<char> valid_;
   std::vector<std::vector<std::vector<double>>> coords_;  // [candidate][axis][node]
   std::vector<int> absorbs_;                               // [candidate]

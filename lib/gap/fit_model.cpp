@@ -32,6 +32,7 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
   sigma_.assign(n, NAN);
   total_.assign(n, NAN);
   block_.assign(n, -1);
+  shared_.assign(n, 0.0);
   valid_.assign(n, 0);
   phi_.assign(2 * static_cast<size_t>(k_count), 1.0);
   for (int c = 0; c < design.num_cells(); ++c)
@@ -41,6 +42,7 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
       const double tau = blocks ? placement->Tau(k, c) : 0.0;
       total_[o] = std::sqrt(sigma_[o] * sigma_[o] + tau * tau);
       if (blocks) block_[o] = placement->point[c];
+      if (blocks) shared_[o] = placement->Shared(k, design.metrics[k], placement->point[c]);
       valid_[o] = std::isfinite(y_[o]) && std::isfinite(sims.base[o]) && sigma_[o] > 0 &&
                   std::isfinite(total_[o]);
     }
@@ -187,13 +189,19 @@ GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
   const int k_count = num_metrics();
   Whitening w;
   w.obs = obs;
-  // Block key: (test point, metric); a recording without one stands alone.
+  // Block key: (test point, metric), the metrics sharing the displacement in one block (−1);
+  // a recording without a test point stands alone. Within a block, metric by metric (the
+  // median first: the spreads are whitened given it).
   auto key = [&](size_t o) {
     return block_[o] < 0 ? std::make_pair(-1 - static_cast<long long>(o), 0)
                          : std::make_pair(static_cast<long long>(block_[o]),
-                                          static_cast<int>(o % k_count));
+                                          settings_.joint_placement && shared_[o] != 0
+                                              ? -1
+                                              : static_cast<int>(o % k_count));
   };
-  std::stable_sort(w.obs.begin(), w.obs.end(), [&](size_t a, size_t b) { return key(a) < key(b); });
+  std::stable_sort(w.obs.begin(), w.obs.end(), [&](size_t a, size_t b) {
+    return key(a) != key(b) ? key(a) < key(b) : a % k_count < b % k_count;
+  });
   for (size_t i = 0; i < w.obs.size();) {
     size_t j = i;
     while (j < w.obs.size() && key(w.obs[j]) == key(w.obs[i])) ++j;
@@ -202,8 +210,11 @@ GapModel::Whitening GapModel::Whiten(const std::vector<size_t>& obs) const {
     for (int r = 0; r < n; ++r)
       for (int c = 0; c < n; ++c) {
         const size_t a = w.obs[i + r], b = w.obs[i + c];
-        const double phi = phi_[a % k_count], psi = phi_[k_count + a % k_count];
-        const double ta = placement(a), tb = placement(b);
+        const size_t ka = a % k_count, kb = b % k_count;
+        const double phi = phi_[ka], ta = placement(a), tb = placement(b);
+        const double psi = ka == kb ? phi_[k_count + ka]
+                                    : std::sqrt(phi_[k_count + ka] * phi_[k_count + kb]) *
+                                          shared_[a] * shared_[b];
         cov(r, c) = psi * ta * tb + (r == c ? phi * sigma_[a] * sigma_[a] : 0.0);
       }
     const Eigen::MatrixXd l = cov.llt().matrixL();
@@ -272,6 +283,31 @@ double GapModel::ToCoord(int candidate, int axis, double value) const {
 
 double GapModel::FromCoord(int candidate, int axis, double coord) const {
   return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::exp(coord) : coord;
+}
+
+GapModel GapModel::JointPlacement() const {
+  GapModel out = *this;
+  out.settings_.joint_placement = true;
+  return out;
+}
+
+GapModel GapModel::WithoutSpreads(int candidate) const {
+  GapModel out = *this;
+  Surface s = surface(candidate);
+  const int k_count = design_.num_metrics();
+  for (size_t o = 0; o < y_.size(); ++o) {
+    const int metric = design_.metrics[o % k_count];
+    if (metric != kMeanMinusMedian && metric != kPlaneStd && metric != kTemporalStd) continue;
+    std::fill_n(s.table.begin() + static_cast<std::ptrdiff_t>(o * s.num_nodes), s.num_nodes,
+                sims_.base[o]);
+  }
+  if (out.own_of_[candidate] < 0) {
+    out.own_of_[candidate] = static_cast<int>(out.own_.size());
+    out.own_.push_back(std::move(s));
+  } else {
+    out.own_[out.own_of_[candidate]] = std::move(s);
+  }
+  return out;
 }
 
 double GapModel::Delta(const Term& term, const double* u, size_t obs) const {

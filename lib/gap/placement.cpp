@@ -261,23 +261,6 @@ std::vector<int> TestPoints(const Design& d, int* num_points) {
   return out;
 }
 
-double PlacementEstimate::Law(int k, int metric, double distance_m) const {
-  if (a.empty()) return 0;
-  if (metric == kMedianBias) return a[k] + b[k] * distance_m;
-  const double own = a[k] * PlacementShape(metric, distance_m);
-  return std::max(own, Floor(k, distance_m));
-}
-
-double PlacementEstimate::Floor(int k, double distance_m) const {
-  const int m = floor_of.empty() ? -1 : floor_of[k];
-  if (m < 0 || floor_distance_m.empty()) return 0.0;
-  size_t i = 0;
-  for (size_t j = 1; j < floor_distance_m.size(); ++j)
-    if (std::fabs(floor_distance_m[j] - distance_m) < std::fabs(floor_distance_m[i] - distance_m))
-      i = j;
-  return std::fabs(sensitivity[k][i]) * Law(m, kMedianBias, distance_m);
-}
-
 PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
                                     const NoiseEstimate& noise, const std::vector<char>& train,
                                     double alpha) {
@@ -577,6 +560,7 @@ PlacementEstimate EstimatePlacement(const Design& d, const Simulations& sims,
         pe.tau_cell[k][c] = pe.tau[k][pe.point[c]] * cell_loading[k][c];
     }
   }
+  EstimateCoupling(&pe);
   return pe;
 }
 

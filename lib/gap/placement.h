@@ -72,6 +72,8 @@ struct PlacementEstimate {
   std::vector<int> floor_of;                  // [k] the median's index, −1: no floor
   std::vector<double> floor_distance_m;       // the distances the sensitivity is known at
   std::vector<std::vector<double>> sensitivity;  // [k][distance] per metre
+  // [k] the share of the median's scatter a spread reads as the panel's displacement (0: none)
+  std::vector<double> coupling;
   std::vector<int> points_used;           // [k] test points the law was estimated from
   std::vector<std::vector<double>> departure;    // [k][point] mean residual about X·β
   std::vector<std::vector<double>> departure_z;  // [k][point] over its sd under the law
@@ -84,16 +86,32 @@ struct PlacementEstimate {
   // differ (Tau). [k][cell]; empty for a metric without a floor.
   std::vector<std::vector<double>> tau_cell;
 
+  // The share of compared metric k's scatter at test point t that is the panel's displacement
+  // along its line of sight, the one the median reads (signed as the metric moves with it): 1
+  // for the median at its law (less where a flagged point's scatter is its departure), a
+  // spread's floor over its scatter (its sensitivity times the median's law, Floor) times its
+  // coupling, 0 for a metric without a floor. Two metrics' scatters at one test point
+  // correlate as the product of their shares (fit.h, (2)).
+  double Shared(int k, int metric, int t) const;
   // The law at distance D for compared metric k (metric: its Metric value), its floor included.
   double Law(int k, int metric, double distance_m) const;
   // The floor of compared metric k's scatter at distance D (0: none).
   double Floor(int k, double distance_m) const;
+  // Its sensitivity to the panel's displacement at the nearest distance it is known at, per
+  // metre (0: no floor).
+  double Sensitivity(int k, double distance_m) const;
   double Tau(int k, int cell) const {
     if (tau.empty()) return 0.0;
     return tau_cell[k].empty() ? tau[k][point[cell]] : tau_cell[k][cell];
   }
   bool empty() const { return tau.empty(); }
 };
+
+// The share of the median's scatter each spread reads as the panel's displacement
+// (PlacementEstimate::coupling): the slope of its test points' departures on its sensitivity
+// times the median's, through 0, over the test points neither flags, within [0, 1] (on the
+// article's rows, log plane_std: 0.62). From the departures and floors of `pe`.
+void EstimateCoupling(PlacementEstimate* pe);
 
 // The scatter of every compared metric, from the cells marked in `train` (recordings whose
 // residual is finite). alpha: the significance at which a test point is flagged.

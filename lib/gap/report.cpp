@@ -103,6 +103,8 @@ void NoiseJson(JsonWriter& w, const DiagnoseResult& r) {
       w.String("law", m == kMedianBias ? "a + b·D [m]" : "a · (D / 10 m)^e");
       if (m != kMedianBias) w.Number("e", InfoOf(m).placement_exponent);
       w.Number("a", pe.a[k]).Number("b", pe.b[k]).Integer("test_points_used", pe.points_used[k]);
+      if (pe.coupling.size() > k && pe.floor_of[k] >= 0)
+        w.Number("coupling_to_median", pe.coupling[k]);
       w.BeginArray("at");
       for (double d : {4.0, 8.0, 12.0, 16.0}) {
         w.BeginObject().Number("distance_m", d);

@@ -476,9 +476,7 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
     });
     for (size_t k = 0; k < open.size(); ++k) {
       Trial& t = trials[k];
-      if (!t.fit.success) continue;
-      if (t.dbic <= 0) continue;
-      if (!t.ho.success) continue;
+      if (!t.fit.success || t.dbic <= 0 || !t.ho.success) continue;
       const double gain = current_ho.data_deviance - t.ho.data_deviance;
       if (gain <= best_gain) continue;
       best = open[k], best_dbic = t.dbic, best_gain = gain, best_fit = t.fit,
@@ -523,6 +521,9 @@ Selection Select(GapModel& model, const PlacementEstimate& placement,
       keep_only(keep);
     }
   }
+  // A range law the spreads contradict is not kept (MedianWithoutSpreads).
+  if (!MedianWithoutSpreads(model, m0, train, fold, num_folds, &current, &current_ho, &r))
+    r.message = "the refit without the dropped effects failed";
   // An effect along the calibration is never selected (it is named "one of" with it), and a
   // kept effect it can stand in for is named "one of" with it too (AlongCalibration).
   if (!r.steps.empty()) keep_only(AlongCalibration(model, m0, current, train, &r));

@@ -87,6 +87,23 @@ std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
                                    const ModelFit& current, const std::vector<char>& train,
                                    Selection* r);
 
+// The rule on a kept range law and the spreads (Select). A range law moves more than the
+// median: a disparity offset that reads far widens every spread by (Z'/Z)², a depth scale by
+// 1 + s. A median over-read that leaves the spreads alone (multipath off the ground, a reflector
+// behind the panel) is neither, yet the law whose median follows it is kept wherever the
+// median's gain outweighs the spreads' misfit. The selection is refitted with one displacement
+// per test point in its median and spreads (GapModel::JointPlacement), and again with a kept
+// range law's departures in the spreads held at the base (GapModel::WithoutSpreads, the same
+// parameters, both from the kept values); where the second has a deviance lower by more than 9,
+// the spreads contradict the law: it is not kept (r->dropped says why) and the median's rest is
+// left to `unexplained`. Under the law itself the difference is about N(−λ², 4λ²), λ the
+// spreads' evidence for its size in standard errors, so a true law is dropped with a chance of
+// at most Φ(−3) = 0.13 % at any λ. Of several, the one with the largest difference goes first,
+// and the rest are judged again without it (KeepSteps). False when such a refit fails.
+bool MedianWithoutSpreads(const GapModel& model, const ModelFit& m0,
+                          const std::vector<char>& train, const std::vector<int>& fold,
+                          int num_folds, ModelFit* current, HeldOut* current_ho, Selection* r);
+
 // Keeps the steps marked in `keep` and their terms in `current`, refitted together from the
 // calibrated base `m0` on the cells marked in `train` and cross-validated over `fold` (`chosen`,
 // when given, follows the steps). False when the refit fails: the kept terms then stay at the

@@ -1,0 +1,50 @@
+// The rule on a kept range law and the spreads (select.h, MedianWithoutSpreads).
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "gap/report_util.h"
+#include "gap/select.h"
+
+namespace depthbias::gap {
+
+bool MedianWithoutSpreads(const GapModel& model, const ModelFit& m0,
+                          const std::vector<char>& train, const std::vector<int>& fold,
+                          int num_folds, ModelFit* current, HeldOut* current_ho, Selection* r) {
+  // Under the law itself, D_law − D_median ~ N(−λ², 4λ²): above 9 with a chance of at most
+  // Φ(−3) whatever λ (select.h).
+  constexpr double kMargin = 9.0;
+  const Simulations& sims = model.sims();
+  const GapModel joint = model.JointPlacement();
+  while (!r->steps.empty() && current->success && current->terms.size() == r->steps.size()) {
+    std::vector<Term> terms;
+    for (const TermFit& t : current->terms) terms.push_back(t.term);
+    int drop = -1;
+    double drop_by = kMargin, drop_without = NAN;
+    ModelFit with;  // the selection read with one displacement per test point
+    for (size_t i = 0; i < current->terms.size(); ++i) {
+      const int cand = current->terms[i].term.candidate;
+      if (!sims.surfaces[cand].candidate.range_law) continue;
+      if (!with.success) with = FitTerms(joint, terms, train, current);
+      if (!with.success) break;
+      const ModelFit alone = FitTerms(joint.WithoutSpreads(cand), terms, train, current);
+      if (!alone.success) continue;
+      const double by = with.Deviance() - alone.Deviance();
+      if (by > drop_by) drop = static_cast<int>(i), drop_by = by, drop_without = alone.Deviance();
+    }
+    if (drop < 0) return true;
+    r->dropped.push_back(r->steps[drop].effect +
+                         " (a range law whose median alone, the spreads left as simulated, fits "
+                         "better: deviance " + text::Num(with.Deviance()) + " with what it "
+                         "does to the spreads, " + text::Num(drop_without) + " without; a median "
+                         "over-read the registry does not hold)");
+    std::vector<char> keep(r->steps.size(), 1);
+    keep[drop] = 0;
+    if (!KeepSteps(model, m0, keep, train, fold, num_folds, &r->steps, current, current_ho,
+                   &r->chosen))
+      return false;
+  }
+  return true;
+}
+
+}  // namespace depthbias::gap
