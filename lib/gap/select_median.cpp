@@ -1,4 +1,5 @@
 // The rule on a kept range law and the spreads (select.h, MedianWithoutSpreads).
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -15,6 +16,11 @@ bool MedianWithoutSpreads(const GapModel& model, const ModelFit& m0,
   // Φ(−3) whatever λ (select.h).
   constexpr double kMargin = 9.0;
   const Simulations& sims = model.sims();
+  const bool any_law = std::any_of(current->terms.begin(), current->terms.end(),
+                                   [&](const TermFit& t) {
+                                     return sims.surfaces[t.term.candidate].candidate.range_law;
+                                   });
+  if (!any_law) return true;
   const GapModel joint = model.JointPlacement();
   while (!r->steps.empty() && current->success && current->terms.size() == r->steps.size()) {
     std::vector<Term> terms;
