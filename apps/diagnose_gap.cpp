@@ -235,9 +235,8 @@ int main(int argc, char** argv) {
         if (real) {  // one of the names the tables and multiples given make, before any work
           bool known = false;
           for (const std::string& csv : inject_csvs)
-            for (const std::string& effect : gap::RealInjectionEffects())
-              for (double t : inject_times)
-                known = known || name == gap::RealInjectionCaseName(TableLabel(csv), effect, t);
+            for (const std::string& n : gap::RealInjectionCaseNames(TableLabel(csv), inject_times))
+              known = known || name == n;
           if (!known)
             throw BadInput("--case: no case named '" + name + "' on the --inject-into tables at "
                            "the --inject-times multiples");

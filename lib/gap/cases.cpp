@@ -171,6 +171,19 @@ sim::ProtocolParams CaseProtocol(const sim::ProtocolParams& base, const Withheld
   return p;
 }
 
+double OutsideShiftM(const OutsideEffect& o, const records::PanelMetrics& r) {
+  switch (o.kind) {
+    case OutsideEffect::kFarOverRead: return o.coef * std::pow(r.distance_m / 10.0, 2);
+    case OutsideEffect::kFarStep: return r.distance_m >= o.from_distance_m ? o.coef : 0.0;
+    case OutsideEffect::kPointStep:
+      return r.light == o.light && r.distance_m == o.distance_m && r.angle_deg == o.angle_deg
+                 ? o.coef
+                 : 0.0;
+    case OutsideEffect::kNone: break;
+  }
+  return 0.0;
+}
+
 std::vector<records::PanelMetrics> MakeCaseTable(const sim::SimParams& base,
                                                  const WithheldCase& c, std::uint64_t seed,
                                                  const SimulateOptions& options) {
@@ -213,14 +226,7 @@ std::vector<records::PanelMetrics> MakeCaseTable(const sim::SimParams& base,
     }
   }
   for (records::PanelMetrics& r : rows) {
-    double shift = 0;
-    if (c.outside.kind == OutsideEffect::kFarOverRead)
-      shift = c.outside.coef * std::pow(r.distance_m / 10.0, 2);
-    if (c.outside.kind == OutsideEffect::kFarStep && r.distance_m >= c.outside.from_distance_m)
-      shift = c.outside.coef;
-    if (c.outside.kind == OutsideEffect::kPointStep && r.light == c.outside.light &&
-        r.distance_m == c.outside.distance_m && r.angle_deg == c.outside.angle_deg)
-      shift = c.outside.coef;
+    const double shift = OutsideShiftM(c.outside, r);
     r.median_m += shift;
     r.mean_m += shift;
   }
@@ -290,6 +296,13 @@ std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
                (in.only_light.empty() ? "" : ", " + in.only_light + " only") + ")";
     }
     if (o.truth.outside.kind != OutsideEffect::kNone) truth = "outside the registry";
+    if (o.truth.on_real && o.truth.outside.kind == OutsideEffect::kFarOverRead) {
+      const double far = 2 * o.truth.outside.from_distance_m;  // RealInjectionCases
+      char size[64];
+      std::snprintf(size, sizeof size, " (%.3g m at %g m, ∝ D²)",
+                    o.truth.outside.coef * (far / 10) * (far / 10), far);
+      truth += size;
+    }
     std::string rec;
     for (const auto& [e, v] : o.recovered) rec += (rec.empty() ? "" : "; ") + e + ": " + v;
     s += "| " + o.truth.name + " | " + (truth.empty() ? "none" : truth) + " | " +

@@ -59,6 +59,10 @@ struct OutsideEffect {
                                // "right" (kFarStep: and the only ones moved)
 };
 
+// What an outside effect adds to a row's median_m and mean_m [m] (its spreads stay): the one
+// definition the simulated tables and the real ones it is injected into share.
+double OutsideShiftM(const OutsideEffect& o, const records::PanelMetrics& row);
+
 struct WithheldCase {
   std::string name;           // "disparity_offset small", "null 3", ...
   std::string family;         // registry, sunset_only, pair, noise_floor, outside, null, unit
@@ -90,6 +94,11 @@ WithheldCase FieldCampaignCase();
 // side (`limits`; 3 significant digits), named "LABEL + effect (1.5 × its limit)" (the multiple
 // as %g); an effect whose limit that way lies beyond its grid is left out. Below 1 × its limit an
 // effect may go unseen (WithheldCase::may_go_unseen); from 1 × on it must be selected.
+// Then, at each multiple from 1 on, an effect outside the registry: a far over-read ∝ D² in
+// the median and the mean alone, as large at the table's farthest distance as the offset at
+// that multiple of its limit reads there (DetectionLimit::far_m), named "LABEL + far over-read
+// ∝ D², outside (1.5 × its limit)": the offset's median without what an offset does to the
+// spreads, which must not be pinned on the offset or on any law the table holds.
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
                                             const std::string& label,
                                             const std::vector<double>& times = {1.5, 0.5});
@@ -98,6 +107,10 @@ std::string RealInjectionCaseName(const std::string& label, const std::string& e
                                   double times);
 // The effects RealInjectionCases injects (each on its over-reading side).
 const std::vector<std::string>& RealInjectionEffects();
+// The names of every case RealInjectionCases may give on table `label` at those multiples
+// (whichever the table's limits leave out).
+std::vector<std::string> RealInjectionCaseNames(const std::string& label,
+                                                const std::vector<double>& times);
 // Whether a case name is one RealInjectionCases gives (any multiple).
 bool IsRealInjectionCase(const std::string& name);
 // The real rows with the case's effects applied by their physics, every row alike (or those of one

@@ -70,6 +70,7 @@ void MapRow(double length, double spread, double side_m, records::PanelMetrics* 
 }
 
 constexpr const char* kTimesLimit = " × its limit)";
+constexpr const char* kFarOverReadName = "far over-read ∝ D², outside";
 
 }  // namespace
 
@@ -83,6 +84,17 @@ std::string RealInjectionCaseName(const std::string& label, const std::string& e
 const std::vector<std::string>& RealInjectionEffects() {
   static const std::vector<std::string> effects{"disparity_offset", "depth_scale"};
   return effects;
+}
+
+std::vector<std::string> RealInjectionCaseNames(const std::string& label,
+                                                const std::vector<double>& times_list) {
+  std::vector<std::string> names;
+  for (const std::string& effect : RealInjectionEffects())
+    for (const double times : times_list)
+      names.push_back(RealInjectionCaseName(label, effect, times));
+  for (const double times : times_list)
+    if (times >= 1) names.push_back(RealInjectionCaseName(label, kFarOverReadName, times));
+  return names;
 }
 
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
@@ -115,6 +127,30 @@ std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
       out.push_back(c);
     }
   }
+  // Outside the registry: the offset's median at the far end, ∝ D², the spreads left alone.
+  const DetectionLimit* offset = nullptr;
+  for (const DetectionLimit& e : limits.effects)
+    if (e.effect == "disparity_offset") offset = &e;
+  const double far = limits.far_distance_m;
+  int side = -1;
+  for (int i = 0; offset && i < 2; ++i)
+    if (std::isfinite(offset->size[i]) && offset->far_m[i] > 0) side = i;
+  if (side < 0 || !(far > 0)) return out;
+  for (const double times : times_list) {
+    if (times < 1) continue;  // below its limit no case asks it to be seen
+    WithheldCase c;
+    c.name = RealInjectionCaseName(label, kFarOverReadName, times);
+    c.family = "outside";
+    c.on_real = true;
+    c.placement_pct = 0;
+    char rounded[32];
+    std::snprintf(rounded, sizeof rounded, "%.3g",
+                  times * offset->far_m[side] / ((far / 10) * (far / 10)));
+    c.outside.kind = OutsideEffect::kFarOverRead;
+    c.outside.coef = std::atof(rounded);
+    c.outside.from_distance_m = far / 2;  // as the simulated case's: 8 m of 16 m
+    out.push_back(c);
+  }
   return out;
 }
 
@@ -135,6 +171,12 @@ std::vector<records::PanelMetrics> InjectIntoRealTable(
     const std::vector<records::PanelMetrics>& real, const WithheldCase& c, double fb,
     double panel_side_m) {
   std::vector<records::PanelMetrics> rows = real;
+  for (records::PanelMetrics& m : rows) {
+    if (!(m.median_m > 0)) continue;  // nothing measured: the row stays as it was
+    const double shift = OutsideShiftM(c.outside, m);
+    m.median_m += shift;
+    m.mean_m += shift;
+  }
   for (const Injection& in : c.injected) {
     const bool offset = in.effect == "disparity_offset";
     if (!offset && in.effect != "depth_scale")

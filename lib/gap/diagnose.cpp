@@ -234,6 +234,7 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   r.correlations = sel.correlations;
   r.steps = sel.steps;
   r.dropped = sel.dropped;
+  r.spreads = sel.spreads;
   r.ambiguous = sel.ambiguous;
   if (!sel.message.empty()) r.message = sel.message;
   ModelFit current = sel.current;

@@ -275,6 +275,23 @@ struct Unexplained {
   bool beyond_placement_law = false;  // a test point the placement estimate flags
 };
 
+// What the spreads say of a kept range law (select.h, MedianWithoutSpreads): the deviances of the
+// selection read with one displacement per test point, as it is and with the law's departures
+// in the spreads held at the base. with − median_only below −9: the spreads confirm the law;
+// within ±9: they cannot tell it from a median over-read outside the registry (the over-read is
+// measured, its cause is not); above 9 the law is not kept.
+struct SpreadsEvidence {
+  int candidate = -1;
+  double with = NAN, median_only = NAN;
+  bool Confirms() const { return with - median_only < -9; }
+};
+// gap.json's "spreads" object of a selected candidate (nothing where none is recorded), and the
+// summary's sentence on it ("" where none).
+void SpreadsEvidenceJson(records::JsonWriter& w, const std::vector<SpreadsEvidence>& all,
+                         int candidate);
+std::string SpreadsEvidenceText(const std::vector<SpreadsEvidence>& all, int candidate,
+                                const std::string& effect);
+
 struct DiagnoseResult {
   bool success = false;
   std::string message;
@@ -310,6 +327,7 @@ struct DiagnoseResult {
   PlacementEstimate placement;     // the scatter of the test points (empty if not estimated)
   Nested nested;                   // the outer hold-out
   std::vector<std::string> dropped;     // selected on the table, not earning in the outer loop
+  std::vector<SpreadsEvidence> spreads;  // each range law the spreads' rule kept (select.h)
   std::vector<Ambiguity> ambiguous;
   std::vector<Unexplained> unexplained;
   // The smallest size of each registered effect the fit's own test finds with 80 % chance on

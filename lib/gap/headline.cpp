@@ -301,6 +301,11 @@ std::string Headline(const DiagnoseResult& r) {
       o << ")";
     }
     o << "\n";
+    for (const TermFit& t : r.selected.terms) {
+      const int c = t.term.candidate;
+      const std::string s = SpreadsEvidenceText(r.spreads, c, r.candidates[c].effect);
+      if (!s.empty()) o << s << "\n";
+    }
   }
   for (const auto& d : r.dropped) o << "not kept: " << d << "\n";
   for (const Ambiguity& a : r.ambiguous) {

@@ -342,6 +342,7 @@ std::string GapJson(const DiagnoseResult& r, const DiagnoseParams& p, const Repo
     w.BeginObject().String("name", CandidateOf(r, t).effect);
     ParamsJson(w.String("scope", ScopeName(t.term.scope)), "params", r, t, false);
     ParamsJson(w, "ci95", r, t, true);
+    SpreadsEvidenceJson(w, r.spreads, t.term.candidate);
     if (i < r.steps.size())
       w.Number("delta_bic", r.steps[i].delta_bic).Number("heldout_gain", r.steps[i].heldout_gain);
     if (i < r.size_spread.size()) {

@@ -29,6 +29,7 @@ struct Selection {
   // Taken by forward selection, then dropped by the step or calibration rule (Select), and why.
   std::vector<std::string> dropped;
   std::vector<Ambiguity> ambiguous;    // a dropped effect named "one of" with what explains it
+  std::vector<SpreadsEvidence> spreads;  // each range law MedianWithoutSpreads kept
 };
 
 // z = (y − μ) / noise of the valid observations (NaN elsewhere).

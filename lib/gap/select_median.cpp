@@ -27,6 +27,7 @@ bool MedianWithoutSpreads(const GapModel& model, const ModelFit& m0,
     for (const TermFit& t : current->terms) terms.push_back(t.term);
     int drop = -1;
     double drop_by = kMargin, drop_without = NAN;
+    std::vector<SpreadsEvidence> evidence;
     ModelFit with;  // the selection read with one displacement per test point
     for (size_t i = 0; i < current->terms.size(); ++i) {
       const int cand = current->terms[i].term.candidate;
@@ -36,9 +37,13 @@ bool MedianWithoutSpreads(const GapModel& model, const ModelFit& m0,
       const ModelFit alone = FitTerms(joint.WithoutSpreads(cand), terms, train, current);
       if (!alone.success) continue;
       const double by = with.Deviance() - alone.Deviance();
+      evidence.push_back({cand, with.Deviance(), alone.Deviance()});
       if (by > drop_by) drop = static_cast<int>(i), drop_by = by, drop_without = alone.Deviance();
     }
-    if (drop < 0) return true;
+    if (drop < 0) {
+      r->spreads = std::move(evidence);
+      return true;
+    }
     r->dropped.push_back(r->steps[drop].effect +
                          " (a range law whose median alone, the spreads left as simulated, fits "
                          "better: deviance " + text::Num(with.Deviance()) + " with what it "
@@ -51,6 +56,30 @@ bool MedianWithoutSpreads(const GapModel& model, const ModelFit& m0,
       return false;
   }
   return true;
+}
+
+void SpreadsEvidenceJson(records::JsonWriter& w, const std::vector<SpreadsEvidence>& all,
+                         int candidate) {
+  for (const SpreadsEvidence& e : all)
+    if (e.candidate == candidate)
+      w.BeginObject("spreads").Number("deviance_with_spreads", e.with)
+          .Number("deviance_median_only", e.median_only)
+          .String("reading", e.Confirms() ? "confirm" : "cannot tell").EndObject();
+}
+
+std::string SpreadsEvidenceText(const std::vector<SpreadsEvidence>& all, int candidate,
+                                const std::string& effect) {
+  for (const SpreadsEvidence& e : all) {
+    if (e.candidate != candidate) continue;
+    const std::string by = text::Num(e.median_only - e.with, 2);
+    if (e.Confirms())
+      return effect + ": the spreads confirm it (deviance " + by +
+             " lower with what it does to them than with the median's law alone; 9 decides)";
+    return effect + ": the spreads cannot tell it from a median over-read outside the registry "
+           "(deviance " + by + " lower with what it does to them; 9 would decide either way): "
+           "the over-read is measured, its cause is not";
+  }
+  return "";
 }
 
 }  // namespace depthbias::gap

@@ -27,9 +27,19 @@ namespace {
 
 sim::SimParams Base() { return test_support::ArticleSimParams(); }
 
-// Effects injected into a real table's rows by their physics (InjectIntoRealTable): each row's
-// depths through the effect's map, hand-computed at 16 m with f·B = 60 px·m.
-TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
+// A disparity offset's limits on a table: −0.653 px over-reads by 2.93 m at its far end.
+DetectionLimit OffsetLimit() {
+  DetectionLimit offset;
+  offset.effect = "disparity_offset";
+  offset.param = "delta_px";
+  offset.neutral = 0;
+  offset.size = {-0.653, 0.764};
+  offset.far_m = {2.93, -1.7};
+  return offset;
+}
+
+// A daylight row at 16 m, measured.
+records::PanelMetrics RowAt16() {
   records::PanelMetrics m;
   m.bag = "a";
   m.light = "daylight";
@@ -42,6 +52,13 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   m.panel_height_m = 0.98;
   m.normal_tilt_deg = 20;
   m.valid_pct = 40;
+  return m;
+}
+
+// Effects injected into a real table's rows by their physics (InjectIntoRealTable): each row's
+// depths through the effect's map, hand-computed at 16 m with f·B = 60 px·m.
+TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
+  const records::PanelMetrics m = RowAt16();
   records::PanelMetrics sunset = m;
   sunset.light = "sunset";
   WithheldCase c;
@@ -107,12 +124,7 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
   // The cases' sizes: 1.5 and 0.5 times the table's limit on the over-reading side; an effect
   // with no limit inside its grid that way is left out.
   DetectionLimits limits;
-  DetectionLimit offset;
-  offset.effect = "disparity_offset";
-  offset.param = "delta_px";
-  offset.neutral = 0;
-  offset.size = {-0.653, 0.764};
-  offset.far_m = {2.93, -1.7};
+  const DetectionLimit offset = OffsetLimit();
   DetectionLimit scale = offset;
   scale.effect = "depth_scale";
   scale.param = "scale_rel";
@@ -143,6 +155,41 @@ TEST(RealTable, AnInjectionMapsEachRowByItsPhysics) {
                            "t + disparity_offset (11 × its limit)", "(2 × its limit)"})
     EXPECT_FALSE(IsRealInjectionCase(name)) << name;
   EXPECT_THROW(RealInjectionCases(limits, "t", {0}), std::invalid_argument);
+}
+
+// Outside the registry on a real table: at each multiple from 1 on, the offset's median at the
+// table's farthest distance as a far over-read ∝ D² in the median and the mean alone (the
+// spreads, the valid share and the window as they were): the offset's over-read without what
+// an offset does to the spreads. Below 1 × no case asks it to be seen.
+TEST(RealTable, AnOverReadOutsideTheRegistryIsTheOffsetsMedianWithoutItsSpreads) {
+  DetectionLimits limits;
+  limits.far_distance_m = 16;
+  const DetectionLimit offset = OffsetLimit();
+  limits.effects = {offset};
+  const std::vector<WithheldCase> cases = RealInjectionCases(limits, "t");
+  ASSERT_EQ(cases.size(), 3u);
+  const WithheldCase& far = cases[2];
+  EXPECT_EQ(far.name, "t + far over-read ∝ D², outside (1.5 × its limit)");
+  EXPECT_TRUE(IsRealInjectionCase(far.name));
+  EXPECT_TRUE(far.on_real && far.injected.empty() && !far.may_go_unseen);
+  EXPECT_EQ(far.outside.kind, OutsideEffect::kFarOverRead);
+  EXPECT_NEAR(far.outside.coef, 1.72, 1e-12);  // 1.5 × 2.93 m / 1.6², 3 digits
+  EXPECT_EQ(far.outside.from_distance_m, 8);
+  const std::vector<std::string> names = RealInjectionCaseNames("t", {1.5, 0.5});
+  EXPECT_NE(std::find(names.begin(), names.end(), far.name), names.end());
+  EXPECT_EQ(RealInjectionCases(limits, "t", {0.5}).size(), 1u);
+  const records::PanelMetrics row = RowAt16();
+  records::PanelMetrics unmeasured = row;
+  unmeasured.median_m = unmeasured.mean_m = NAN;
+  const auto rows = InjectIntoRealTable({row, unmeasured}, far, 60, 1);
+  EXPECT_NEAR(rows[0].median_m, 16 + 1.72 * 2.56, 1e-9);
+  EXPECT_NEAR(rows[0].mean_m - rows[0].median_m, 0.1, 1e-9);
+  EXPECT_EQ(rows[0].plane_std_m, row.plane_std_m);
+  EXPECT_EQ(rows[0].temporal_std_m, row.temporal_std_m);
+  EXPECT_EQ(rows[0].valid_pct, row.valid_pct);
+  EXPECT_EQ(rows[0].panel_width_m, row.panel_width_m);
+  EXPECT_EQ(rows[0].normal_tilt_deg, row.normal_tilt_deg);
+  EXPECT_TRUE(std::isnan(rows[1].median_m));
 }
 
 // The map against the physics it stands for: the simulator's own table without effect, mapped by

@@ -474,6 +474,52 @@ TEST(Criteria, AFarOverReadIsAnsweredByItsCellsOrByItsLaw) {
       << "a law for a one-point step";
 }
 
+// On a real table an over-read outside the registry is answered as on a simulated one, by the
+// cells `unexplained` names, less the entries the table's own diagnosis gives (the same metric
+// and place: the table's, not the over-read's). And what the table's own diagnosis selects
+// must be read again at its size: an offset the table holds, grown by the over-read, has taken
+// it. Built to fail: the table's offset of -0.24 px read -0.37 px.
+TEST(Criteria, OnARealTableAnOverReadTakenByTheTablesOwnLawIsPinnedOnIt) {
+  WithheldCase c;
+  c.name = "t + far over-read";
+  c.on_real = true;
+  c.placement_pct = 0;
+  c.outside.kind = OutsideEffect::kFarOverRead;
+  c.outside.coef = 0.22;
+  c.outside.from_distance_m = 12;
+  const std::string own = "{\"metric\": \"log_plane_std\", \"where\": \"distance 8 m\", "
+                          "\"bags\": [\"r0\", \"r2\"]}";
+  const std::string far = "{\"metric\": \"median_bias_m\", \"where\": \"distance 16 m\", "
+                          "\"bags\": [\"r1\", \"r3\"]}";
+  auto offset = [](double delta) {
+    return "{\"name\": \"disparity_offset\", \"scope\": \"shared\", \"params\": "
+           "{\"delta_px\": " + std::to_string(delta) + "}}";
+  };
+  const std::string reference = Json(offset(-0.24), "", "[" + own + "]");
+  // The table's offset read again, the far cells named beside the table's own entry: an answer.
+  CaseOutcome o = JudgeCase(Json(offset(-0.25), "", "[" + own + ", " + far + "]"), c, Rows(),
+                            reference);
+  EXPECT_TRUE(o.pass) << o.why;
+  // The table's own entry alone names no cell of the over-read.
+  o = JudgeCase(Json(offset(-0.25), "", "[" + own + "]"), c, Rows(), reference);
+  EXPECT_FALSE(o.pass);
+  EXPECT_NE(o.why.find("unexplained does not name the right cells"), std::string::npos) << o.why;
+  // The table's offset grown by the over-read has taken it, whatever `unexplained` says.
+  o = JudgeCase(Json(offset(-0.37), "", "[" + own + ", " + far + "]"), c, Rows(), reference);
+  EXPECT_FALSE(o.pass);
+  EXPECT_NE(o.why.find("the table's own disparity_offset"), std::string::npos) << o.why;
+  // Or dropped.
+  o = JudgeCase(Json("", "", "[" + own + ", " + far + "]"), c, Rows(), reference);
+  EXPECT_FALSE(o.pass);
+  EXPECT_NE(o.why.find("disparity_offset (not selected)"), std::string::npos) << o.why;
+  // An entry the table does not give at 8 m is the over-read's, and not its cells.
+  const std::string near = "{\"metric\": \"median_bias_m\", \"where\": \"distance 8 m\", "
+                           "\"bags\": [\"r0\"]}";
+  EXPECT_FALSE(JudgeCase(Json(offset(-0.24), "", "[" + own + ", " + far + ", " + near + "]"), c,
+                         Rows(), reference)
+                   .pass);
+}
+
 // The tables themselves: the placement scatter is there (each test point off by its own range
 // error, shared by its recordings), rows keep their nominal distance, an outside effect is
 // applied to the rows it names, and the unit has 32 rows of one scenario.
