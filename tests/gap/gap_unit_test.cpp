@@ -1722,6 +1722,18 @@ TEST(MedianWithoutSpreads, ARangeLawIsKeptOnlyWhereTheSpreadsFollowIt) {
     for (const std::string& d : r.dropped) std::printf("dropped: %s\n", d.c_str());
     EXPECT_EQ(r.steps.size(), spreads_follow ? 1u : 0u);
     EXPECT_EQ(r.dropped.size(), spreads_follow ? 0u : 1u);
+    // What the spreads say of the law kept (gap.json's selected[].spreads): they confirm it.
+    ASSERT_EQ(r.spreads.size(), spreads_follow ? 1u : 0u);
+    if (spreads_follow) {
+      const SpreadsEvidence& e = r.spreads[0];
+      std::printf("spreads: deviance %.1f with them, %.1f with the median's law alone\n", e.with,
+                  e.median_only);
+      EXPECT_EQ(e.candidate, 0);
+      EXPECT_TRUE(e.Confirms());
+      EXPECT_NE(SpreadsEvidenceText(r.spreads, 0, "disparity_offset").find("confirm it"),
+                std::string::npos);
+      EXPECT_EQ(SpreadsEvidenceText(r.spreads, 1, "depth_scale"), "");
+    }
   }
 }
 

@@ -934,6 +934,14 @@ TEST(Cases, AUsersFieldBagsAreTheirOffsetAndTheirProjector) {
   std::string recovered;
   for (const auto& [effect, size] : o.recovered) recovered += effect + ": " + size + "; ";
   EXPECT_TRUE(o.pass) << o.why << "\n" << recovered;
+  // The offset kept is the median's over-read; the spreads of 32 rows from another renderer do
+  // not confirm it (deviance 5.2 lower with its departures in them, 9 decides): the summary says
+  // the cause is not measured (docs/gap/cases.md, An over-read outside the registry on real
+  // tables; a far over-read that leaves the spreads alone is taken by this offset too).
+  EXPECT_NE(summary.find("disparity_offset: the spreads cannot tell it from a median over-read "
+                         "outside the registry"),
+            std::string::npos)
+      << summary;
   // What the unit cannot see (limits.h), on its second line: an offset found must lie beyond
   // the limit on its side, and the limit must be a size a field campaign can miss (its test
   // alone at least 0.03 px: 32 rows under 2 % placement scatter are not a lab).
