@@ -247,7 +247,7 @@ def is_real(case):
 
 
 def is_real_outside(case):
-    """A far over-read outside the registry injected into a real table (counted apart)."""
+    """An effect outside the registry injected into a real table (counted apart)."""
     return is_real(case) and ", outside (" in case
 
 
@@ -296,7 +296,7 @@ def main(argv):
         print("Effects injected into real tables: %d passes of %d (%d cases x %d seeds)."
               % (real_total, len(real) * n, len(real), n))
     if outside:
-        print("Over-reads outside the registry injected into real tables: %d passes of %d "
+        print("Effects outside the registry injected into real tables: %d passes of %d "
               "(%d cases x %d seeds)." % (outside_total, len(outside) * n, len(outside), n))
     held = []
     for (seed, table), path in zip(runs, argv[1:]):

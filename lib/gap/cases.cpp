@@ -303,6 +303,13 @@ std::string FormatCases(const std::vector<CaseOutcome>& outcomes,
                     o.truth.outside.coef * (far / 10) * (far / 10), far);
       truth += size;
     }
+    if (o.truth.on_real && o.truth.outside.kind == OutsideEffect::kPointStep) {
+      char size[96];
+      std::snprintf(size, sizeof size, " (%.3g m at %s %g m %g°)", o.truth.outside.coef,
+                    o.truth.outside.light.c_str(), o.truth.outside.distance_m,
+                    o.truth.outside.angle_deg);
+      truth += size;
+    }
     std::string rec;
     for (const auto& [e, v] : o.recovered) rec += (rec.empty() ? "" : "; ") + e + ": " + v;
     s += "| " + o.truth.name + " | " + (truth.empty() ? "none" : truth) + " | " +

@@ -102,6 +102,16 @@ WithheldCase FieldCampaignCase();
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
                                             const std::string& label,
                                             const std::vector<double>& times = {1.5, 0.5});
+// Outside the registry on a real table, one test point: the reference's (the table's own
+// diagnosis) test point of its first row's light at its second distance and second angle (8 m
+// and 10° on the article's protocol) read `times` its limit far in every recording, the limit
+// the smallest departure the reference's placement test flags there (TwoSidedCritical of
+// placement_alpha over the test points, times the median's placement law at that distance),
+// named "LABEL + one test point read far, outside (1.5 × its limit)"; from 1 × on.
+std::vector<WithheldCase> RealPointStepCases(const DiagnoseResult& reference,
+                                             const std::string& label,
+                                             const std::vector<double>& times,
+                                             double placement_alpha);
 // The name RealInjectionCases gives the case of `effect` at `times` its limit on table `label`.
 std::string RealInjectionCaseName(const std::string& label, const std::string& effect,
                                   double times);

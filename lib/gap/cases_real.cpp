@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <memory>
+#include <set>
 #include <stdexcept>
 
 #include "gap/cases.h"
@@ -71,6 +73,22 @@ void MapRow(double length, double spread, double side_m, records::PanelMetrics* 
 
 constexpr const char* kTimesLimit = " × its limit)";
 constexpr const char* kFarOverReadName = "far over-read ∝ D², outside";
+constexpr const char* kPointStepName = "one test point read far, outside";
+
+// A case outside the registry on a real table, its size to 3 significant digits.
+WithheldCase OutsideOnReal(const std::string& label, const char* name, double times,
+                           OutsideEffect::Kind kind, double coef) {
+  WithheldCase c;
+  c.name = RealInjectionCaseName(label, name, times);
+  c.family = "outside";
+  c.on_real = true;
+  c.placement_pct = 0;  // the table's own placements
+  char rounded[32];
+  std::snprintf(rounded, sizeof rounded, "%.3g", coef);
+  c.outside.kind = kind;
+  c.outside.coef = std::atof(rounded);
+  return c;
+}
 
 }  // namespace
 
@@ -92,9 +110,48 @@ std::vector<std::string> RealInjectionCaseNames(const std::string& label,
   for (const std::string& effect : RealInjectionEffects())
     for (const double times : times_list)
       names.push_back(RealInjectionCaseName(label, effect, times));
-  for (const double times : times_list)
-    if (times >= 1) names.push_back(RealInjectionCaseName(label, kFarOverReadName, times));
+  for (const char* outside : {kFarOverReadName, kPointStepName})
+    for (const double times : times_list)
+      if (times >= 1) names.push_back(RealInjectionCaseName(label, outside, times));
   return names;
+}
+
+std::vector<WithheldCase> RealPointStepCases(const DiagnoseResult& reference,
+                                             const std::string& label,
+                                             const std::vector<double>& times_list,
+                                             double placement_alpha) {
+  std::vector<WithheldCase> out;
+  const PlacementEstimate& pe = reference.placement;
+  const Design& d = reference.design;
+  const auto km = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
+  if (pe.num_points < 2 || km == d.metrics.end()) return out;
+  // The table's second distance and second angle (8 m and 10° on the article's protocol), in
+  // the light of its first row; its nearest when the table has one of either.
+  std::set<double> distances(pe.point_distance_m.begin(), pe.point_distance_m.end());
+  std::set<double> angles(pe.point_angle_deg.begin(), pe.point_angle_deg.end());
+  const double dist = *std::next(distances.begin(), distances.size() > 1 ? 1 : 0);
+  const double angle = *std::next(angles.begin(), angles.size() > 1 ? 1 : 0);
+  const std::string light = pe.point_light[pe.point[0]];
+  bool found = false;
+  for (int t = 0; t < pe.num_points; ++t)
+    found = found || (pe.point_light[t] == light && pe.point_distance_m[t] == dist &&
+                      pe.point_angle_deg[t] == angle);
+  if (!found) return out;
+  // The smallest departure the table's report flags there: the test-point test's critical z
+  // (Bonferroni over the test points) times the median's placement law at that distance.
+  const double limit = TwoSidedCritical(placement_alpha / pe.num_points) *
+                       pe.Law(static_cast<int>(km - d.metrics.begin()), kMedianBias, dist);
+  if (!(limit > 0)) return out;
+  for (const double times : times_list) {
+    if (times < 1) continue;
+    WithheldCase c =
+        OutsideOnReal(label, kPointStepName, times, OutsideEffect::kPointStep, times * limit);
+    c.outside.light = light;
+    c.outside.distance_m = dist;
+    c.outside.angle_deg = angle;
+    out.push_back(c);
+  }
+  return out;
 }
 
 std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
@@ -138,16 +195,8 @@ std::vector<WithheldCase> RealInjectionCases(const DetectionLimits& limits,
   if (side < 0 || !(far > 0)) return out;
   for (const double times : times_list) {
     if (times < 1) continue;  // below its limit no case asks it to be seen
-    WithheldCase c;
-    c.name = RealInjectionCaseName(label, kFarOverReadName, times);
-    c.family = "outside";
-    c.on_real = true;
-    c.placement_pct = 0;
-    char rounded[32];
-    std::snprintf(rounded, sizeof rounded, "%.3g",
-                  times * offset->far_m[side] / ((far / 10) * (far / 10)));
-    c.outside.kind = OutsideEffect::kFarOverRead;
-    c.outside.coef = std::atof(rounded);
+    WithheldCase c = OutsideOnReal(label, kFarOverReadName, times, OutsideEffect::kFarOverRead,
+                                   times * offset->far_m[side] / ((far / 10) * (far / 10)));
     c.outside.from_distance_m = far / 2;  // as the simulated case's: 8 m of 16 m
     out.push_back(c);
   }
@@ -234,7 +283,10 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
   const std::string reference_json = json(reference, label);
   const double fb = base.sensor.focal_px() * base.sensor.baseline_m;
   std::vector<CaseOutcome> out;
-  for (const WithheldCase& c : RealInjectionCases(reference.limits, label, times)) {
+  std::vector<WithheldCase> cases = RealInjectionCases(reference.limits, label, times);
+  for (const WithheldCase& c : RealPointStepCases(reference, label, times, params.placement_alpha))
+    cases.push_back(c);
+  for (const WithheldCase& c : cases) {
     if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end()) continue;
     const sim::SceneParams& scene = base.protocol.scene;
     const std::vector<records::PanelMetrics> rows =

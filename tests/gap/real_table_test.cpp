@@ -192,6 +192,47 @@ TEST(RealTable, AnOverReadOutsideTheRegistryIsTheOffsetsMedianWithoutItsSpreads)
   EXPECT_TRUE(std::isnan(rows[1].median_m));
 }
 
+// One test point read far on a real table: the table's second distance and angle in its first
+// light, 1.5 times the smallest departure its own placement test flags there (the critical z of
+// 0.05 over its test points, Bonferroni, times the median's law at that distance); none below 1.
+TEST(RealTable, OneTestPointReadFarIsSizedByTheTablesOwnPlacementLaw) {
+  DiagnoseResult reference;
+  reference.design.metrics = {kMedianBias, kPlaneStd};
+  PlacementEstimate& pe = reference.placement;
+  for (const char* light : {"daylight", "sunset"})
+    for (double d : {4.0, 8.0, 16.0})
+      for (double a : {0.0, 10.0, 35.0}) {
+        pe.point_light.push_back(light);
+        pe.point_distance_m.push_back(d);
+        pe.point_angle_deg.push_back(a);
+      }
+  pe.num_points = static_cast<int>(pe.point_light.size());
+  pe.point = {9, 0};  // the first row's test point: sunset, 4 m, 0°
+  pe.a = {0.1, 0.02};
+  pe.b = {0.05, 0};
+  const std::vector<WithheldCase> cases = RealPointStepCases(reference, "t", {1.5, 0.5}, 0.05);
+  ASSERT_EQ(cases.size(), 1u);
+  const WithheldCase& c = cases[0];
+  EXPECT_EQ(c.name, "t + one test point read far, outside (1.5 × its limit)");
+  EXPECT_TRUE(IsRealInjectionCase(c.name) && c.on_real && c.injected.empty());
+  EXPECT_EQ(c.outside.kind, OutsideEffect::kPointStep);
+  EXPECT_EQ(c.outside.light, "sunset");
+  EXPECT_EQ(c.outside.distance_m, 8);
+  EXPECT_EQ(c.outside.angle_deg, 10);
+  // 1.5 × 2.99 (two-sided, 0.05 / 18) × (0.1 + 0.05 · 8) m = 2.24 m.
+  EXPECT_NEAR(c.outside.coef, 1.5 * TwoSidedCritical(0.05 / 18) * 0.5, 0.005);
+  EXPECT_NEAR(c.outside.coef, 2.24, 0.01);
+  const std::vector<std::string> names = RealInjectionCaseNames("t", {1.5});
+  EXPECT_NE(std::find(names.begin(), names.end(), c.name), names.end());
+  // Without a median, or without its test point: none.
+  DiagnoseResult no_median = reference;
+  no_median.design.metrics = {kPlaneStd};
+  EXPECT_TRUE(RealPointStepCases(no_median, "t", {1.5}, 0.05).empty());
+  DiagnoseResult one_point = reference;
+  one_point.placement.num_points = 1;
+  EXPECT_TRUE(RealPointStepCases(one_point, "t", {1.5}, 0.05).empty());
+}
+
 // The map against the physics it stands for: the simulator's own table without effect, mapped by
 // InjectIntoRealTable, and the simulator's table of the same effect (the renderer's disparities
 // moved, every pixel quantized and the panel's window laid on the measured plane anew) agree
