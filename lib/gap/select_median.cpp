@@ -71,13 +71,18 @@ std::string SpreadsEvidenceText(const std::vector<SpreadsEvidence>& all, int can
                                 const std::string& effect) {
   for (const SpreadsEvidence& e : all) {
     if (e.candidate != candidate) continue;
-    const std::string by = text::Num(e.median_only - e.with, 2);
-    if (e.Confirms())
-      return effect + ": the spreads confirm it (deviance " + by +
-             " lower with what it does to them than with the median's law alone; 9 decides)";
+    const double f = e.median_only - e.with;
+    // Two fits of the same parameters: the deviance difference is twice the log of their
+    // likelihood ratio, the odds the data give the law against the median's law alone.
+    const std::string odds = f > 2 * std::log(1000.0) ? "over 1000 to 1"
+                             : f >= 0                ? text::Num(std::exp(f / 2), 2) + " to 1"
+                                                     : "1 to " + text::Num(std::exp(-f / 2), 2);
+    const std::string by = "deviance " + text::Num(f, 2) + " lower with its departures in them "
+                           "than with the median's law alone, odds of " + odds + " for it";
+    if (e.Confirms()) return effect + ": the spreads confirm it (" + by + "; 9 decides)";
     return effect + ": the spreads cannot tell it from a median over-read outside the registry "
-           "(deviance " + by + " lower with what it does to them; 9 would decide either way): "
-           "the over-read is measured, its cause is not";
+           "(" + by + "; 9, about 90 to 1, would decide either way): the over-read is measured, "
+           "its cause is not";
   }
   return "";
 }

@@ -1737,6 +1737,23 @@ TEST(MedianWithoutSpreads, ARangeLawIsKeptOnlyWhereTheSpreadsFollowIt) {
   }
 }
 
+// The two fits have the same parameters, so their deviance difference f is twice the log of
+// their likelihood ratio: odds of e^(f/2) for the law against the median's law alone.
+TEST(MedianWithoutSpreads, TheSpreadsEvidenceIsReadAsOdds) {
+  const std::vector<SpreadsEvidence> e = {{2, 100, 105.2}, {3, 100, 97}, {4, 100, 130}};
+  auto text = [&](int c) { return SpreadsEvidenceText(e, c, "law"); };
+  EXPECT_NE(text(2).find("cannot tell it from a median over-read outside the registry (deviance "
+                         "5.2 lower with its departures in them than with the median's law "
+                         "alone, odds of 13 to 1 for it"),
+            std::string::npos)
+      << text(2);
+  EXPECT_NE(text(3).find("deviance -3 lower"), std::string::npos) << text(3);
+  EXPECT_NE(text(3).find("odds of 1 to 4.5 for it"), std::string::npos) << text(3);
+  EXPECT_NE(text(4).find("the spreads confirm it"), std::string::npos) << text(4);
+  EXPECT_NE(text(4).find("odds of over 1000 to 1"), std::string::npos) << text(4);
+  EXPECT_EQ(text(5), "");
+}
+
 // One displacement is read once (fit.h, (2): FitSettings::joint_placement). SpreadTable's rows
 // without offset, one test point at 16 m moved 1.2 m further (three times its placement law)
 // in its median, its plane_std moving with it or not. Against the base, a panel that stood
