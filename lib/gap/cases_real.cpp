@@ -124,7 +124,9 @@ std::vector<WithheldCase> RealPointStepCases(const DiagnoseResult& reference,
   const PlacementEstimate& pe = reference.placement;
   const Design& d = reference.design;
   const auto km = std::find(d.metrics.begin(), d.metrics.end(), kMedianBias);
-  if (pe.num_points < 2 || km == d.metrics.end()) return out;
+  if (pe.num_points < 2 || pe.point.empty() || pe.point[0] < 0 ||
+      pe.point[0] >= static_cast<int>(pe.point_light.size()) || km == d.metrics.end())
+    return out;
   // The table's second distance and second angle (8 m and 10° on the article's protocol), in
   // the light of its first row; its nearest when the table has one of either.
   std::set<double> distances(pe.point_distance_m.begin(), pe.point_distance_m.end());

@@ -231,6 +231,9 @@ TEST(RealTable, OneTestPointReadFarIsSizedByTheTablesOwnPlacementLaw) {
   DiagnoseResult one_point = reference;
   one_point.placement.num_points = 1;
   EXPECT_TRUE(RealPointStepCases(one_point, "t", {1.5}, 0.05).empty());
+  DiagnoseResult no_cells = reference;
+  no_cells.placement.point.clear();
+  EXPECT_TRUE(RealPointStepCases(no_cells, "t", {1.5}, 0.05).empty());
 }
 
 // The map against the physics it stands for: the simulator's own table without effect, mapped by
