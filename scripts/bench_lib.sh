@@ -6,6 +6,11 @@
 # function called as $(f) (bench_machine's nproc or /proc/loadavg) would go on and print a
 # figure with a hole in it; with it, the assignment fails and the caller's ERR trap names it.
 shopt -s inherit_errexit
+# And the ERR trap is not inherited by functions unless errtrace is on: a command failing inside
+# a function called on its own line (bench_obstacle_detector.sh's pcl_in, its sed) would end the
+# script under set -e without the trap's line. With it the trap names the failing command there,
+# and again at the assignment of a $(f) that failed.
+set -E
 
 best() { sort -g | head -1; }
 
