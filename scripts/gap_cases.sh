@@ -9,8 +9,8 @@
 # offset and a depth scale at 1.5 and 0.5 times the limits each table's own report gives,
 # judged on what the injection moved, and two effects outside the registry injected into the
 # same tables (a far over-read ∝ D² in the median alone, one test point read far, each at 1.5
-# times what the table's own report could miss); and 20 tables without effect. A case passes only when
-# the selected set equals the injected set (outside the registry: nothing selected,
+# times what the table's own report could miss); and 20 tables without effect. A case passes
+# only when the selected set equals the injected set (outside the registry: nothing selected,
 # `unexplained` names the right cells), sizes are within 20 %, and the simulated held-out shrink
 # is >= 70 % (of the injected part, on the article); the null suite when at least 19 of 20
 # select nothing. Columns: case, injected, selected, recovered, largest

@@ -286,8 +286,9 @@ std::vector<CaseOutcome> RunRealInjectionCases(const sim::SimParams& base,
   const double fb = base.sensor.focal_px() * base.sensor.baseline_m;
   std::vector<CaseOutcome> out;
   std::vector<WithheldCase> cases = RealInjectionCases(reference.limits, label, times);
-  for (const WithheldCase& c : RealPointStepCases(reference, label, times, params.placement_alpha))
-    cases.push_back(c);
+  const std::vector<WithheldCase> steps =
+      RealPointStepCases(reference, label, times, params.placement_alpha);
+  cases.insert(cases.end(), steps.begin(), steps.end());
   for (const WithheldCase& c : cases) {
     if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end()) continue;
     const sim::SceneParams& scene = base.protocol.scene;
