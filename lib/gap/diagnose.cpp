@@ -490,8 +490,10 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
       Ambiguity a{{e.name, sigma ? "calibration:sigma_d" : "calibration:hole_prob"},
                   {SizeText(cand, e.fit), (sigma ? "sigma_d_px " : "invalid_prob ") + need},
                   std::sqrt(sigma ? sel.r2_sigma[i] : sel.r2_p[i]), "", {}};
-      if (!current.terms.empty()) {  // what the selection reads were this effect the cause
-        const ModelFit with = FitBeside(model, current, e.fit, all);
+      // What the selection reads were this effect the cause: one fit of the terms that act
+      // together, the window at their joint depth (fit.h, 1a; a drift beside an offset).
+      if (!current.terms.empty()) {
+        const ModelFit with = FitBeside(model.JointWindow(), current, e.fit, all);
         if (with.success) a.selection_with = with.terms;  // the named effect last
       }
       r.ambiguous.push_back(std::move(a));

@@ -47,7 +47,8 @@ struct FitSettings {
   int max_iterations = 50;
   // Effects that move the window through the measured depth read it at their joint depth (1a);
   // false: each one's window departures add, as every other metric's (the default: docs/gap/
-  // cases.md, The window at the joint depth).
+  // cases.md, The window at the joint depth). A selection read beside a named effect is read
+  // with it (JointWindow, diagnose.cpp).
   bool joint_window = false;
   // One displacement read in every metric it moves: a test point's median and spreads share the
   // panel's displacement along its line of sight (PlacementEstimate::Shared), so that a spread
@@ -184,6 +185,8 @@ class GapModel {
   GapModel WithoutSpreads(int candidate) const;
   // The same model with FitSettings::joint_placement on.
   GapModel JointPlacement() const;
+  // The same model with FitSettings::joint_window on (1a).
+  GapModel JointWindow() const;
 
   int NumGroups(const Term& term) const;
   int Group(const Term& term, int cell) const;

@@ -78,7 +78,9 @@ GapModel::GapModel(const Design& design, const Simulations& sims, const NoiseEst
     if (sims.surfaces[i].candidate.effect == "disparity_offset" &&
         sims.surfaces[i].candidate.axes.size() == 1)
       offset = static_cast<int>(i);
-  if (!settings.joint_window || kmed == design.metrics.end() || offset < 0) return;
+  // Built whatever the setting, so that a copy may read the window at the joint depth
+  // (JointWindow); SharesWindow decides where it is read.
+  if (kmed == design.metrics.end() || offset < 0) return;
   median_k_ = static_cast<int>(kmed - design.metrics.begin());
   window_m_.assign(n, {});
   window_h_.assign(n, {});
@@ -283,6 +285,12 @@ double GapModel::ToCoord(int candidate, int axis, double value) const {
 
 double GapModel::FromCoord(int candidate, int axis, double coord) const {
   return sims_.surfaces[candidate].candidate.axes[axis].log_scale ? std::exp(coord) : coord;
+}
+
+GapModel GapModel::JointWindow() const {
+  GapModel out = *this;
+  out.settings_.joint_window = true;
+  return out;
 }
 
 GapModel GapModel::JointPlacement() const {

@@ -2333,7 +2333,9 @@ TEST(Smooth, ARangeLawsWindowIsAveragedOverPlacement) {
 // started from nothing recovers both within 10 %, the two-term prediction of the valid share is
 // H at the joint depth, one term alone is its own surface. With the terms' window departures
 // added (FitSettings::joint_window false, the default), the same fit reads the offset more than
-// 20 % high (0.233 px).
+// 20 % high (0.233 px); its copy with the joint window (GapModel::JointWindow), refitting the
+// offset's fit beside the drift's as the diagnosis reads a selection beside a named effect,
+// reads both within 10 %.
 TEST(Window, TermsThatMoveTheWindowReadItAtTheirJointDepth) {
   const double fb = 60.8, delta = 0.15, rate = 0.6;
   const auto offset_m = [&](double d, double dist) { return -d * dist * dist / fb; };
@@ -2445,6 +2447,21 @@ TEST(Window, TermsThatMoveTheWindowReadItAtTheirJointDepth) {
   std::printf("windows added: offset %.4f px, drift %.4f px/s\n", fit.terms[0].values[0][0],
               fit.terms[1].values[0][0]);
   EXPECT_GT(std::fabs(fit.terms[0].values[0][0] - delta), 0.2 * delta);
+  // The selection read beside a named effect (diagnose.cpp, what the selection reads were it
+  // the cause): the default model's copy with the joint window, started from each term's fit
+  // alone, reads the offset at its size; the default model itself reads it high.
+  const ModelFit offset_alone = FitTerms(added, {terms[0]}, all);
+  const ModelFit drift_alone = FitTerms(added, {terms[1]}, all);
+  ASSERT_TRUE(offset_alone.success && drift_alone.success);
+  const GapModel joint = added.JointWindow();
+  ASSERT_TRUE(joint.SharesWindow(terms));
+  const ModelFit beside = FitBeside(joint, offset_alone, drift_alone.terms[0], all);
+  ASSERT_TRUE(beside.success) << beside.message;
+  EXPECT_NEAR(beside.terms[0].values[0][0], delta, 0.1 * delta);
+  EXPECT_NEAR(beside.terms[1].values[0][0], rate, 0.1 * rate);
+  const ModelFit beside_added = FitBeside(added, offset_alone, drift_alone.terms[0], all);
+  ASSERT_TRUE(beside_added.success) << beside_added.message;
+  EXPECT_GT(std::fabs(beside_added.terms[0].values[0][0] - delta), 0.2 * delta);
 }
 
 TEST(Json, EscapesAndWritesNullForNonFinite) {
