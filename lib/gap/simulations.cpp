@@ -51,6 +51,20 @@ void FillGaps(const std::vector<int>& shape, double* v) {
   std::copy(out.begin(), out.end(), v);
 }
 
+// The test point a recording's name (sim::CellName, at its nominal distance and angle) names:
+// the name without its emitter and preset, which one placement of the panel shares.
+std::string TestPointOf(const sim::Cell& c) {
+  std::string k = c.name;
+  for (const std::string token : {"_emitter-on", "_emitter-off"}) {
+    const size_t at = k.find(token);
+    if (at != std::string::npos) k.erase(at, token.size());
+  }
+  if (k.size() >= c.preset.size() && k.compare(k.size() - c.preset.size(), std::string::npos,
+                                               c.preset) == 0)
+    k.erase(k.size() - c.preset.size());
+  return k;
+}
+
 }  // namespace
 
 bool SimulateOptions::IsValid(std::string* why) const {
@@ -66,7 +80,17 @@ bool SimulateOptions::IsValid(std::string* why) const {
   if (!(shift_px >= 0 && shift_px <= 10)) return fail("shift_px must be in [0, 10]");
   if (!(placement_probe >= 0 && placement_probe <= 0.2))
     return fail("placement_probe must be in [0, 0.2]");
+  if (!(lateral_phase_px >= 0 && lateral_phase_px <= 10))
+    return fail("lateral_phase_px must be in [0, 10]");
+  if (!(window_phase_px >= 0 && window_phase_px <= 10))
+    return fail("window_phase_px must be in [0, 10]");
   return true;
+}
+
+std::vector<double> WindowPhaseMargins(const SimulateOptions& options) {
+  if (!(options.window_phase_px > 0)) return {};
+  return {std::max(0.0, options.region_margin_px - options.window_phase_px),
+          options.region_margin_px + options.window_phase_px};
 }
 
 bool Simulations::Matches(const Design& design) const {
@@ -92,7 +116,8 @@ namespace {
 std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams>& params,
                                                 const Design& d, const SimulateOptions& options,
                                                 const std::vector<double>& spills_px,
-                                                std::vector<double>* depth_m) {
+                                                std::vector<double>* depth_m,
+                                                std::vector<std::vector<double>>* phases) {
   const int k_count = d.num_metrics();
   const size_t widths = spills_px.empty() ? 1 : spills_px.size();
   std::vector<std::vector<double>> out(
@@ -102,6 +127,10 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
   mp.frames = options.frames;
   mp.threads = options.threads;
   mp.region_margin_px = options.region_margin_px;
+  if (phases) {
+    mp.valid_share_margins_px = WindowPhaseMargins(options);
+    phases->assign(mp.valid_share_margins_px.size(), std::vector<double>(d.cells.size(), NAN));
+  }
   const int groups = params.size() == 1 ? 1 : d.num_scenarios();
   if (params.empty() || (params.size() != 1 && static_cast<int>(params.size()) != groups))
     throw std::invalid_argument("SimulateValues: one parameter set, or one per scenario");
@@ -120,6 +149,13 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
     if (cells.empty()) continue;
     sim::SimParams p = params[g];
     p.dither_quantization = options.dither_quantization;
+    if (options.lateral_phase_px > 0) {
+      // Each test point's panel at a lateral pixel phase of its own, its recordings at one.
+      const double px_deg = 180 / M_PI / p.sensor.focal_px();
+      for (sim::Cell& c : cells)
+        c.angle_deg += options.lateral_phase_px * px_deg *
+                       (2 * common::UniformOf(p.seed, "lateral|" + TestPointOf(c)) - 1);
+    }
     const std::vector<std::vector<sim::CellMetricsResult>> by_width =
         sim::SimulateCellsMetricsSpills(
             p, cells, mp,
@@ -130,6 +166,9 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
         const int i = index[c];
         if (i < 0) continue;
         if (depth_m && w == 0) (*depth_m)[c] = r[i].truth.panel_depth_m;
+        if (phases && w == 0)
+          for (size_t m = 0; m < phases->size(); ++m)
+            (*phases)[m][c] = r[i].valid_pct_at_margins[m];
         if (!r[i].metrics.ok()) continue;
         for (int k = 0; k < k_count; ++k)
           out[w][static_cast<size_t>(c) * k_count + k] = MetricValue(r[i].metrics, d.metrics[k]);
@@ -142,8 +181,9 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
 }  // namespace
 
 std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& d,
-                                   const SimulateOptions& options, std::vector<double>* depth_m) {
-  return std::move(SimulateTables(params, d, options, {}, depth_m)[0]);
+                                   const SimulateOptions& options, std::vector<double>* depth_m,
+                                   std::vector<std::vector<double>>* phases) {
+  return std::move(SimulateTables(params, d, options, {}, depth_m, phases)[0]);
 }
 
 std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& params,
@@ -151,7 +191,7 @@ std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& para
                                                       const SimulateOptions& options,
                                                       const std::vector<double>& spills_px) {
   if (spills_px.empty()) return {};
-  return SimulateTables({params}, d, options, spills_px, nullptr);
+  return SimulateTables({params}, d, options, spills_px, nullptr, nullptr);
 }
 
 Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
@@ -167,11 +207,38 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
   sim::SimParams base = base_in;
   base.sensor = ListScenarios(base_in.sensor, d);
   s.sensor = base.sensor;
-  auto run = [&](const sim::SimParams& p, std::vector<double>* depth = nullptr) {
+  auto run = [&](const sim::SimParams& p, std::vector<double>* depth = nullptr,
+                 std::vector<std::vector<double>>* phases = nullptr) {
     ++s.runs;
-    return SimulateValues({p}, d, options, depth);
+    return SimulateValues({p}, d, options, depth, phases);
   };
-  s.base = run(base, &s.depth_m);
+  // The valid share of an effect that moves the window, read at the window's other pixel phases
+  // (SimulateOptions::window_phase_px): the base's at each phase, for its departures.
+  const size_t k_count = static_cast<size_t>(d.num_metrics());
+  const auto valid_at = std::find(d.metrics.begin(), d.metrics.end(), kValidPct);
+  const size_t valid_k = static_cast<size_t>(valid_at - d.metrics.begin());
+  bool phased = options.window_phase_px > 0 && valid_at != d.metrics.end();
+  if (phased)
+    phased = std::any_of(candidates.begin(), candidates.end(),
+                         [](const Candidate& c) { return c.moves_window; });
+  std::vector<std::vector<double>> base_phases;
+  s.base = run(base, &s.depth_m, phased ? &base_phases : nullptr);
+  // A node's valid share: the base's plus the mean of its departures at the measured margin and
+  // at each other phase, each against the base at its own (NaN departures left out).
+  auto phase_mean = [&](std::vector<double>* table,
+                        const std::vector<std::vector<double>>& node_phases) {
+    for (size_t c = 0; c < d.cells.size(); ++c) {
+      const size_t o = c * k_count + valid_k;
+      double sum = (*table)[o] - s.base[o];
+      int n = std::isfinite(sum) ? 1 : 0;
+      if (n == 0) sum = 0;
+      for (size_t m = 0; m < node_phases.size(); ++m) {
+        const double dep = node_phases[m][c] - base_phases[m][c];
+        if (std::isfinite(dep)) sum += dep, ++n;
+      }
+      if (n > 0) (*table)[o] = s.base[o] + sum / n;
+    }
+  };
   const size_t obs = s.base.size();
 
   // The calibration's Jacobian: every scenario nudged at once (each cell sees only its own).
@@ -212,7 +279,6 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
     s.moved_rel = options.placement_probe;
   }
 
-  const size_t k_count = static_cast<size_t>(d.num_metrics());
   // A node that departs from a base without departures by the emitter's gain alone changes no
   // emitter-off cell (sim::Departures::OnlyEmitter): those are the base's, bit for bit, and only
   // the emitter-on cells are simulated.
@@ -277,9 +343,14 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
           group.push_back(other);
           spills.push_back(at[other]->departures.region_spill_px);
         }
-      const std::vector<std::vector<double>> tables =
-          group.size() == 1 ? std::vector<std::vector<double>>{run(p)}
-                            : SimulateValuesSpills(p, d, options, spills);
+      std::vector<std::vector<double>> node_phases;
+      const bool phases_here = phased && cand.moves_window && group.size() == 1;
+      std::vector<std::vector<double>> tables =
+          group.size() == 1
+              ? std::vector<std::vector<double>>{run(p, nullptr,
+                                                     phases_here ? &node_phases : nullptr)}
+              : SimulateValuesSpills(p, d, options, spills);
+      if (phases_here) phase_mean(&tables[0], node_phases);
       if (group.size() > 1) s.runs += static_cast<int>(group.size());
       for (size_t g = 0; g < group.size(); ++g) {
         store(group[g], tables[g]);

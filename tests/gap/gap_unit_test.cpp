@@ -309,6 +309,66 @@ std::vector<std::pair<std::vector<double>, sim::Cell>> EveryNodeIsTheTableAlone(
   return moved;
 }
 
+// With the window's phases (window_phase_px), the valid share of an effect that moves the window
+// is the base's plus the mean of its departures at the measured margin and at the two others,
+// each against the base at its own; its other metrics, and every metric of an effect that does
+// not move the window, are as without; and the offset's steps make the phases differ somewhere.
+TEST(Simulations, TheValidShareOfAWindowMoverIsItsMeanOverThePhases) {
+  const sim::SimParams p = FallbackSensor(41);
+  std::vector<records::PanelMetrics> rows = Twins({8, 16}, 0, "HA");
+  for (const auto& r : Twins({12}, 35, "HA")) rows.push_back(r);
+  Design d;
+  std::string why;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  std::vector<Candidate> cand;
+  ASSERT_TRUE(SelectCandidates("disparity_offset,panel_tilt", &cand, &why)) << why;
+  ASSERT_EQ(cand.size(), 2u);
+  ASSERT_TRUE(cand[0].moves_window && !cand[1].moves_window);
+  SimulateOptions one;
+  one.frames = 4;
+  SimulateOptions three = one;
+  three.window_phase_px = 1.0 / 3;
+  const Simulations a = SimulateDesign(p, d, cand, one), b = SimulateDesign(p, d, cand, three);
+  EXPECT_EQ(a.runs, b.runs);
+  EXPECT_EQ(a.base, b.base);
+  EXPECT_EQ(a.surfaces[1].table, b.surfaces[1].table);
+  std::vector<std::vector<double>> base_at;
+  SimulateValues({p}, d, three, nullptr, &base_at);
+  ASSERT_EQ(base_at.size(), 2u);
+  const int kk = d.num_metrics();
+  const int valid_k = static_cast<int>(
+      std::find(d.metrics.begin(), d.metrics.end(), kValidPct) - d.metrics.begin());
+  ASSERT_LT(valid_k, kk);
+  const Surface &sa = a.surfaces[0], &sb = b.surfaces[0];
+  int phased = 0;
+  for (int node = 0; node < sb.num_nodes; ++node) {
+    const std::vector<double> values{cand[0].axes[0].nodes[node]};
+    if (IsNeutral(cand[0], values)) continue;
+    sim::SimParams q = p;
+    ASSERT_TRUE(sim::BuildDepartures({SpecAt(cand[0], values)}, &q.departures, &why)) << why;
+    std::vector<std::vector<double>> at;
+    const std::vector<double> whole = SimulateValues({q}, d, three, nullptr, &at);
+    for (int c = 0; c < d.num_cells(); ++c)
+      for (int k = 0; k < kk; ++k) {
+        const size_t o = static_cast<size_t>(c) * kk + k;
+        const double va = sa.table[o * sa.num_nodes + node], vb = sb.table[o * sb.num_nodes + node];
+        if (k != valid_k) {
+          EXPECT_EQ(va, vb) << d.cells[c].name << " node " << node;
+          continue;
+        }
+        if (std::isnan(whole[o])) continue;  // a gap of the grid, filled from a neighbour
+        const double expected = b.base[o] + ((whole[o] - b.base[o]) + (at[0][c] - base_at[0][c]) +
+                                             (at[1][c] - base_at[1][c])) / 3;
+        EXPECT_NEAR(vb, expected, 1e-9) << d.cells[c].name << " node " << node;
+        EXPECT_EQ(va, whole[o]);
+        phased += std::fabs(vb - va) > 1e-6;
+      }
+  }
+  EXPECT_GT(phased, 0) << "the phases read other steps somewhere";
+  three.window_phase_px = -0.1;
+  EXPECT_THROW(SimulateDesign(p, d, cand, three), std::invalid_argument);
+}
+
 // The emitter's gain alone changes nothing with the emitter off: its nodes simulate the
 // emitter-on cells alone and take the base's for the others. Every node's table is then what
 // the whole table simulated at that gain gives (a recording listed twice included); and every
