@@ -66,12 +66,9 @@ constexpr char kUsage[] =
     "                       reach P % (20, 30)\n"
     "  --joint-window       effects that move the panel's window through the measured\n"
     "                       depth read it at their joint depth, not each at its own (off)\n"
-    "  --window-phase P     the valid share of effects that move the window also read\n"
-    "                       with the region drawn P px wider and narrower a side, and\n"
-    "                       averaged: the pixel phases a campaign's placements draw, 0 to\n"
-    "                       10 (0: the one phase of the nominal distances)\n"
-    "  --lateral-phase P    each test point's simulated panel moved sideways by a draw\n"
-    "                       within ±P px of its own, 0 to 10 (0: the nominal angles)\n"
+    "  --lateral-phase P    the valid share of effects that move the window read with\n"
+    "                       each test point's panel moved sideways by a draw within ±P px\n"
+    "                       of its own, 0 to 10 (0.5; 0: the nominal angles)\n"
     "  --case NAME          --cases: only this case (as named in the table's first column;\n"
     "                       repeatable; \"no effect\" for the 20 null tables, \"no effect,\n"
     "                       user's unit\" for 20 of 32 rows)\n"
@@ -167,7 +164,6 @@ int main(int argc, char** argv) {
       }
       else if (a == "--case") only_cases.push_back(args.Value());
       else if (a == "--joint-window") params.fit.joint_window = true;
-      else if (a == "--window-phase") params.simulate.window_phase_px = args.Number(false, 0, 10);
       else if (a == "--lateral-phase")
         params.simulate.lateral_phase_px = args.Number(false, 0, 10);
       else if (a == "--min-effect-shrink") params.min_effect_shrink_pct = args.Number(false, 0, 99.9);

@@ -112,8 +112,7 @@ std::string SimulationsKey(const std::string& origin, const sim::SimParams& base
     << " step_logit_p " << Exact(options.step_logit_p) << " replica " << options.replica
     << " shift_px " << Exact(options.shift_px) << " dither_quantization "
     << options.dither_quantization << " placement_probe " << Exact(options.placement_probe)
-    << " window_phase_px " << Exact(options.window_phase_px) << " lateral_phase_px "
-    << Exact(options.lateral_phase_px) << "\n";
+    << " lateral_phase_px " << Exact(options.lateral_phase_px) << "\n";
   k << "metrics";
   for (int m : d.metrics) k << " " << m;
   k << "\n";

@@ -82,15 +82,16 @@ bool SimulateOptions::IsValid(std::string* why) const {
     return fail("placement_probe must be in [0, 0.2]");
   if (!(lateral_phase_px >= 0 && lateral_phase_px <= 10))
     return fail("lateral_phase_px must be in [0, 10]");
-  if (!(window_phase_px >= 0 && window_phase_px <= 10))
-    return fail("window_phase_px must be in [0, 10]");
   return true;
 }
 
-std::vector<double> WindowPhaseMargins(const SimulateOptions& options) {
-  if (!(options.window_phase_px > 0)) return {};
-  return {std::max(0.0, options.region_margin_px - options.window_phase_px),
-          options.region_margin_px + options.window_phase_px};
+Design LateralPhases(const Design& d, const sim::SimParams& base, double shift_px) {
+  Design out = d;
+  const double px_deg = 180 / M_PI / base.sensor.focal_px();
+  for (sim::Cell& c : out.cells)
+    c.angle_deg +=
+        shift_px * px_deg * (2 * common::UniformOf(base.seed, "lateral|" + TestPointOf(c)) - 1);
+  return out;
 }
 
 bool Simulations::Matches(const Design& design) const {
@@ -116,8 +117,7 @@ namespace {
 std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams>& params,
                                                 const Design& d, const SimulateOptions& options,
                                                 const std::vector<double>& spills_px,
-                                                std::vector<double>* depth_m,
-                                                std::vector<std::vector<double>>* phases) {
+                                                std::vector<double>* depth_m) {
   const int k_count = d.num_metrics();
   const size_t widths = spills_px.empty() ? 1 : spills_px.size();
   std::vector<std::vector<double>> out(
@@ -127,10 +127,6 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
   mp.frames = options.frames;
   mp.threads = options.threads;
   mp.region_margin_px = options.region_margin_px;
-  if (phases) {
-    mp.valid_share_margins_px = WindowPhaseMargins(options);
-    phases->assign(mp.valid_share_margins_px.size(), std::vector<double>(d.cells.size(), NAN));
-  }
   const int groups = params.size() == 1 ? 1 : d.num_scenarios();
   if (params.empty() || (params.size() != 1 && static_cast<int>(params.size()) != groups))
     throw std::invalid_argument("SimulateValues: one parameter set, or one per scenario");
@@ -149,13 +145,6 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
     if (cells.empty()) continue;
     sim::SimParams p = params[g];
     p.dither_quantization = options.dither_quantization;
-    if (options.lateral_phase_px > 0) {
-      // Each test point's panel at a lateral pixel phase of its own, its recordings at one.
-      const double px_deg = 180 / M_PI / p.sensor.focal_px();
-      for (sim::Cell& c : cells)
-        c.angle_deg += options.lateral_phase_px * px_deg *
-                       (2 * common::UniformOf(p.seed, "lateral|" + TestPointOf(c)) - 1);
-    }
     const std::vector<std::vector<sim::CellMetricsResult>> by_width =
         sim::SimulateCellsMetricsSpills(
             p, cells, mp,
@@ -166,9 +155,6 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
         const int i = index[c];
         if (i < 0) continue;
         if (depth_m && w == 0) (*depth_m)[c] = r[i].truth.panel_depth_m;
-        if (phases && w == 0)
-          for (size_t m = 0; m < phases->size(); ++m)
-            (*phases)[m][c] = r[i].valid_pct_at_margins[m];
         if (!r[i].metrics.ok()) continue;
         for (int k = 0; k < k_count; ++k)
           out[w][static_cast<size_t>(c) * k_count + k] = MetricValue(r[i].metrics, d.metrics[k]);
@@ -181,9 +167,8 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
 }  // namespace
 
 std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& d,
-                                   const SimulateOptions& options, std::vector<double>* depth_m,
-                                   std::vector<std::vector<double>>* phases) {
-  return std::move(SimulateTables(params, d, options, {}, depth_m, phases)[0]);
+                                   const SimulateOptions& options, std::vector<double>* depth_m) {
+  return std::move(SimulateTables(params, d, options, {}, depth_m)[0]);
 }
 
 std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& params,
@@ -191,7 +176,7 @@ std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& para
                                                       const SimulateOptions& options,
                                                       const std::vector<double>& spills_px) {
   if (spills_px.empty()) return {};
-  return SimulateTables({params}, d, options, spills_px, nullptr, nullptr);
+  return SimulateTables({params}, d, options, spills_px, nullptr);
 }
 
 Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
@@ -207,38 +192,26 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
   sim::SimParams base = base_in;
   base.sensor = ListScenarios(base_in.sensor, d);
   s.sensor = base.sensor;
-  auto run = [&](const sim::SimParams& p, std::vector<double>* depth = nullptr,
-                 std::vector<std::vector<double>>* phases = nullptr) {
+  auto run = [&](const sim::SimParams& p, std::vector<double>* depth = nullptr) {
     ++s.runs;
-    return SimulateValues({p}, d, options, depth, phases);
+    return SimulateValues({p}, d, options, depth);
   };
-  // The valid share of an effect that moves the window, read at the window's other pixel phases
-  // (SimulateOptions::window_phase_px): the base's at each phase, for its departures.
+  s.base = run(base, &s.depth_m);
+  // The valid share of an effect that moves the window, read with each test point's panel at a
+  // lateral phase of its own (SimulateOptions::lateral_phase_px): the base moved alike, for its
+  // departures.
   const size_t k_count = static_cast<size_t>(d.num_metrics());
   const auto valid_at = std::find(d.metrics.begin(), d.metrics.end(), kValidPct);
   const size_t valid_k = static_cast<size_t>(valid_at - d.metrics.begin());
-  bool phased = options.window_phase_px > 0 && valid_at != d.metrics.end();
-  if (phased)
-    phased = std::any_of(candidates.begin(), candidates.end(),
-                         [](const Candidate& c) { return c.moves_window; });
-  std::vector<std::vector<double>> base_phases;
-  s.base = run(base, &s.depth_m, phased ? &base_phases : nullptr);
-  // A node's valid share: the base's plus the mean of its departures at the measured margin and
-  // at each other phase, each against the base at its own (NaN departures left out).
-  auto phase_mean = [&](std::vector<double>* table,
-                        const std::vector<std::vector<double>>& node_phases) {
-    for (size_t c = 0; c < d.cells.size(); ++c) {
-      const size_t o = c * k_count + valid_k;
-      double sum = (*table)[o] - s.base[o];
-      int n = std::isfinite(sum) ? 1 : 0;
-      if (n == 0) sum = 0;
-      for (size_t m = 0; m < node_phases.size(); ++m) {
-        const double dep = node_phases[m][c] - base_phases[m][c];
-        if (std::isfinite(dep)) sum += dep, ++n;
-      }
-      if (n > 0) (*table)[o] = s.base[o] + sum / n;
-    }
-  };
+  const bool lateral = options.lateral_phase_px > 0 && valid_at != d.metrics.end() &&
+                       std::any_of(candidates.begin(), candidates.end(),
+                                   [](const Candidate& c) { return c.moves_window; });
+  const Design lateral_d = lateral ? LateralPhases(d, base, options.lateral_phase_px) : d;
+  std::vector<double> base_lateral;
+  if (lateral) {
+    ++s.runs;
+    base_lateral = SimulateValues({base}, lateral_d, options);
+  }
   const size_t obs = s.base.size();
 
   // The calibration's Jacobian: every scenario nudged at once (each cell sees only its own).
@@ -343,14 +316,18 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
           group.push_back(other);
           spills.push_back(at[other]->departures.region_spill_px);
         }
-      std::vector<std::vector<double>> node_phases;
-      const bool phases_here = phased && cand.moves_window && group.size() == 1;
       std::vector<std::vector<double>> tables =
-          group.size() == 1
-              ? std::vector<std::vector<double>>{run(p, nullptr,
-                                                     phases_here ? &node_phases : nullptr)}
-              : SimulateValuesSpills(p, d, options, spills);
-      if (phases_here) phase_mean(&tables[0], node_phases);
+          group.size() == 1 ? std::vector<std::vector<double>>{run(p)}
+                            : SimulateValuesSpills(p, d, options, spills);
+      if (lateral && cand.moves_window && group.size() == 1) {
+        ++s.runs;
+        const std::vector<double> at = SimulateValues({p}, lateral_d, options);
+        for (size_t c = 0; c < d.cells.size(); ++c) {
+          const size_t o = c * k_count + valid_k;
+          if (std::isfinite(at[o]) && std::isfinite(base_lateral[o]))
+            tables[0][o] = s.base[o] + (at[o] - base_lateral[o]);
+        }
+      }
       if (group.size() > 1) s.runs += static_cast<int>(group.size());
       for (size_t g = 0; g < group.size(); ++g) {
         store(group[g], tables[g]);

@@ -32,21 +32,14 @@ struct SimulateOptions {
   // The base once more with every panel placed this share of its distance further along its
   // line of sight: what a placement error does to each metric (placement.h); 0: not.
   double placement_probe = 0.02;
-  // Every run's panel moved sideways by a draw uniform within ±lateral_phase_px pixels, one per
-  // test point (its recordings share it; fixed by the seed and the test point): the window's
-  // whole-pixel steps at a lateral phase of each test point's own, as a campaign's placements
-  // draw them, not at the one the nominal angle gives (at 0° the panel's two sides at one
-  // phase). 0: the nominal angles.
-  double lateral_phase_px = 0;
-  // The valid share of every effect that moves the window (Candidate::moves_window) read at the
-  // window's pixel phases region_margin_px ∓ window_phase_px as well (sim::MetricsParams::
-  // valid_share_margins_px, from the same rendering), each node's the mean of its departures
-  // from the base at the three: the share falls by whole pixels once the window outgrows the
-  // panel, at the phase one nominal distance gives; a campaign's placements draw their own.
-  // 0 (the default): the measured margin's alone. At 1/3 a large offset is read without the
-  // steps' bias, but an offset beside a drift is read further off (docs/gap/cases.md, Over five
-  // seeds: the valid share at three pixel phases).
-  double window_phase_px = 0;
+  // The valid share of every effect that moves the window (Candidate::moves_window) read with
+  // each test point's panel moved sideways by a draw uniform within ±lateral_phase_px pixels of
+  // its own (its recordings share it; fixed by the seed and the test point): a node's share is
+  // the base's plus its departure from the base moved alike, one more simulation of the table a
+  // node. The share falls by whole pixels once the window outgrows the panel; at the nominal
+  // angles every test point at one distance reads the steps at one phase (at 0° the panel's two
+  // sides at the same one), a campaign's at phases of their own. 0: the nominal angles.
+  double lateral_phase_px = 0.5;
 
   bool IsValid(std::string* why) const;
 };
@@ -91,15 +84,15 @@ Simulations SimulateDesign(const sim::SimParams& base, const Design& design,
 
 // The design's metrics [obs] with params[s] for the cells of scenario s (one SimParams for all
 // when params has one element); depth_m gets each cell's true panel depth when given.
-// With `phases`, also the valid share of each cell at each of WindowPhaseMargins(options)
-// ([margin][cell], NaN where not read).
 std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, const Design& design,
                                    const SimulateOptions& options,
-                                   std::vector<double>* depth_m = nullptr,
-                                   std::vector<std::vector<double>>* phases = nullptr);
+                                   std::vector<double>* depth_m = nullptr);
 
-// The window's other pixel phases: region_margin_px ∓ window_phase_px (none when it is 0).
-std::vector<double> WindowPhaseMargins(const SimulateOptions& options);
+// The design with each test point's panel moved sideways by a draw uniform within ±shift_px
+// pixels (its recordings, named by sim::CellName at their nominal distance and angle, share it;
+// fixed by base's seed): SimulateOptions::lateral_phase_px's.
+Design LateralPhases(const Design& d, const sim::SimParams& base, double shift_px);
+
 
 // The same with one parameter set at each width of the region_spill effect (params' own width
 // is not used): [w] is SimulateValues({params with region_spill_px = spills_px[w]}). The widths

@@ -145,36 +145,6 @@ std::vector<metrics::PooledPixel> Pool(const std::vector<std::uint16_t>& frames_
 // The region drawn on result->window (grown by spill_px: region_spill), its frames (the
 // footprint's reused), the pixels its pooled frames decide (a drawn region, spill_px > 0, is not
 // decided) and the kernel's metrics of them, into *result.
-// The valid share of the region drawn at margin_px on result->window, decided as the measured
-// region is, from the frames of every pixel in `known` (all `frames` of them): NaN without a
-// decided pixel.
-double ValidShareAt(const StereoSim& sim, const MetricsParams& mp, int frames, int pooled_frames,
-                    const metrics::Plane& ground, const std::vector<std::uint32_t>& known,
-                    const std::vector<std::uint16_t>& known_frames, double margin_px,
-                    const CellMetricsResult& result) {
-  const SensorParams& s = sim.params().sensor;
-  metrics::PanelRegion region;
-  const PixelList pixels = sim.RegionPixels(margin_px, &region, &result.window, 0.0);
-  const std::size_t n = pixels.size();
-  if (n == 0) return NAN;
-  std::vector<std::uint16_t> all;
-  RenderFramesReusing(sim, region.pixels, pixels, known, known_frames, frames, &all);
-  const std::vector<std::uint16_t> pooled_part(
-      all.begin(), all.begin() + static_cast<std::ptrdiff_t>(pooled_frames * n));
-  const metrics::PanelPixels decided = metrics::DecidePanelPixels(
-      s.intrinsics, region, Pool(pooled_part, n), s.depth_units_m, &ground, mp.region);
-  std::size_t samples = 0, kept = 0;
-  for (std::size_t k = 0, j = 0; k < n && j < decided.pixels.size(); ++k) {
-    if (region.pixels[k] != decided.pixels[j]) continue;
-    ++j;
-    ++kept;
-    for (int f = 0; f < frames; ++f) samples += all[static_cast<std::size_t>(f) * n + k] != 0;
-  }
-  if (kept == 0) return NAN;
-  return 100.0 * static_cast<double>(samples) /
-         (static_cast<double>(kept) * static_cast<double>(frames));
-}
-
 void MeasureRegion(const StereoSim& sim, const MetricsParams& mp, int frames, int pooled_frames,
                    const metrics::Plane& ground, const metrics::PanelRegion& footprint,
                    const std::vector<std::uint16_t>& footprint_frames, double spill_px,
@@ -182,7 +152,6 @@ void MeasureRegion(const StereoSim& sim, const MetricsParams& mp, int frames, in
   const SensorParams& s = sim.params().sensor;
   const auto& in = s.intrinsics;
   records::PanelMetrics& m = result->metrics;
-  result->valid_pct_at_margins.assign(mp.valid_share_margins_px.size(), NAN);
   metrics::PanelRegion region;
   PixelList pixels = sim.RegionPixels(mp.region_margin_px, &region, &result->window, spill_px);
   if (pixels.empty()) {
@@ -191,32 +160,9 @@ void MeasureRegion(const StereoSim& sim, const MetricsParams& mp, int frames, in
     m.message = "the panel's image region is empty";
     return;
   }
-  // With other margins asked for, every frame of the widest region is rendered once and each
-  // region's frames are taken from it (a pixel's draw depends on the pixel and the frame alone).
-  const bool margins = !mp.valid_share_margins_px.empty() && !(spill_px > 0);
-  metrics::PanelRegion widest;
-  std::vector<std::uint16_t> widest_frames;
-  if (margins) {
-    double least = mp.region_margin_px;
-    for (double margin : mp.valid_share_margins_px) least = std::min(least, margin);
-    const PixelList widest_px = sim.RegionPixels(least, &widest, &result->window, 0.0);
-    RenderFramesReusing(sim, widest.pixels, widest_px, footprint.pixels, footprint_frames,
-                        pooled_frames, &widest_frames);
-    widest_frames.resize(static_cast<std::size_t>(frames) * widest_px.size());
-    for (int f = pooled_frames; f < frames; ++f)
-      sim.RenderPixels(f, widest_px, widest_frames.data() + f * widest_px.size());
-    for (std::size_t i = 0; i < mp.valid_share_margins_px.size(); ++i)
-      result->valid_pct_at_margins[i] =
-          ValidShareAt(sim, mp, frames, pooled_frames, ground, widest.pixels, widest_frames,
-                       mp.valid_share_margins_px[i], *result);
-  }
   std::vector<std::uint16_t> stored;
-  if (margins)
-    RenderFramesReusing(sim, region.pixels, pixels, widest.pixels, widest_frames, pooled_frames,
-                        &stored);
-  else
-    RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
-                        pooled_frames, &stored);
+  RenderFramesReusing(sim, region.pixels, pixels, footprint.pixels, footprint_frames,
+                      pooled_frames, &stored);
   if (!(spill_px > 0)) {  // a drawn region is not decided
     const std::size_t n_px = pixels.size();
     metrics::PanelPixels decided = metrics::DecidePanelPixels(
@@ -264,17 +210,9 @@ void MeasureRegion(const StereoSim& sim, const MetricsParams& mp, int frames, in
   for (int k = 0; k < pooled_frames; ++k)
     kernel.AddRegionCounts(stored.data() + static_cast<std::size_t>(k) * pixels.size(),
                            s.depth_units_m);
-  if (margins && frames > pooled_frames) {  // the later frames, from the widest region's
-    std::vector<std::uint16_t> all;
-    RenderFramesReusing(sim, region.pixels, pixels, widest.pixels, widest_frames, frames, &all);
-    for (int k = pooled_frames; k < frames; ++k)
-      kernel.AddRegionCounts(all.data() + static_cast<std::size_t>(k) * pixels.size(),
-                             s.depth_units_m);
-  } else {
-    for (int k = pooled_frames; k < frames; ++k) {
-      sim.RenderPixels(k, pixels, &counts);
-      kernel.AddRegionCounts(counts.data(), s.depth_units_m);
-    }
+  for (int k = pooled_frames; k < frames; ++k) {
+    sim.RenderPixels(k, pixels, &counts);
+    kernel.AddRegionCounts(counts.data(), s.depth_units_m);
   }
   const metrics::KernelResult measured = kernel.Finish(-result->truth.panel.axis_height, &m);
   if (!measured.success) {
@@ -307,11 +245,6 @@ bool MetricsParams::IsValid(std::string* why) const {
     if (why) *why = "threads must be in [1, 256]";
     return false;
   }
-  for (double margin : valid_share_margins_px)
-    if (!(margin >= 0 && margin <= 100)) {
-      if (why) *why = "valid_share_margins_px must be in [0, 100]";
-      return false;
-    }
   return true;
 }
 
@@ -335,7 +268,6 @@ std::vector<CellMetricsResult> SimulateMetricsSpills(const SimParams& params, co
   m.preset = cell.preset;
   m.distance_m = cell.distance_m;
   m.angle_deg = cell.angle_deg;
-  result.valid_pct_at_margins.assign(mp.valid_share_margins_px.size(), NAN);
   // Every width alike, until the region is drawn.
   auto all = [&]() { return std::vector<CellMetricsResult>(spills_px.size(), result); };
 

@@ -24,11 +24,6 @@ struct MetricsParams {
   metrics::PanelPixelParams region;  // the decision of the panel's pixels
   int frames = 0;            // 0: the protocol's
   int threads = 1;           // recordings evaluated in parallel (results do not depend on it)
-  // The valid share (valid_pct) also of the regions these margins draw on the same window, each
-  // decided as the measured one is (CellMetricsResult::valid_pct_at_margins), from the frames
-  // rendered for the measured region: the window's whole-pixel steps read at other pixel phases.
-  // Not read on a drawn region (region_spill): NaN there.
-  std::vector<double> valid_share_margins_px;
 
   bool IsValid(std::string* why) const;
 };
@@ -42,8 +37,6 @@ struct CellMetricsResult {
   // The panel's known size laid on the plane the first frames measure, around the panel seen
   // (as panel_extract's window): the rectangle the region is drawn from.
   metrics::PanelRectangle window;
-  // valid_pct at each of MetricsParams::valid_share_margins_px (NaN where not read).
-  std::vector<double> valid_pct_at_margins;
 };
 CellMetricsResult SimulateMetrics(const SimParams& params, const Cell& cell,
                                   const MetricsParams& metrics = {});

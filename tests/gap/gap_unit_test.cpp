@@ -309,45 +309,62 @@ std::vector<std::pair<std::vector<double>, sim::Cell>> EveryNodeIsTheTableAlone(
   return moved;
 }
 
-// With the window's phases (window_phase_px), the valid share of an effect that moves the window
-// is the base's plus the mean of its departures at the measured margin and at the two others,
-// each against the base at its own; its other metrics, and every metric of an effect that does
-// not move the window, are as without; and the offset's steps make the phases differ somewhere.
-TEST(Simulations, TheValidShareOfAWindowMoverIsItsMeanOverThePhases) {
-  const sim::SimParams p = FallbackSensor(41);
+// With lateral phases (lateral_phase_px), the valid share of an effect that moves the window is
+// the base's plus its departure with every panel moved alike (LateralPhases: one draw a test
+// point, its recordings sharing it, within the bound); every other metric and every effect that
+// does not move the window are as without, one more simulation a node and one for the base.
+TEST(Simulations, TheValidShareOfAWindowMoverIsReadAtLateralPhases) {
+  const sim::SimParams p = FallbackSensor(43);
   std::vector<records::PanelMetrics> rows = Twins({8, 16}, 0, "HA");
+  for (const auto& r : Twins({16}, 0, "HD")) rows.push_back(r);
   for (const auto& r : Twins({12}, 35, "HA")) rows.push_back(r);
   Design d;
   std::string why;
   ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
   std::vector<Candidate> cand;
   ASSERT_TRUE(SelectCandidates("disparity_offset,panel_tilt", &cand, &why)) << why;
-  ASSERT_EQ(cand.size(), 2u);
   ASSERT_TRUE(cand[0].moves_window && !cand[1].moves_window);
-  SimulateOptions one;
-  one.frames = 4;
-  SimulateOptions three = one;
-  three.window_phase_px = 1.0 / 3;
-  const Simulations a = SimulateDesign(p, d, cand, one), b = SimulateDesign(p, d, cand, three);
-  EXPECT_EQ(a.runs, b.runs);
+  SimulateOptions nominal;
+  nominal.frames = 4;
+  nominal.lateral_phase_px = 0;
+  SimulateOptions lateral = nominal;
+  lateral.lateral_phase_px = 0.5;
+  const Simulations a = SimulateDesign(p, d, cand, nominal);
+  const Simulations b = SimulateDesign(p, d, cand, lateral);
+  int movers = 0;
+  for (double v : cand[0].axes[0].nodes) movers += !IsNeutral(cand[0], {v});
+  EXPECT_EQ(b.runs, a.runs + 1 + movers);
   EXPECT_EQ(a.base, b.base);
   EXPECT_EQ(a.surfaces[1].table, b.surfaces[1].table);
-  std::vector<std::vector<double>> base_at;
-  SimulateValues({p}, d, three, nullptr, &base_at);
-  ASSERT_EQ(base_at.size(), 2u);
+  const Design moved = LateralPhases(d, p, 0.5);
+  const double px_deg = 180 / M_PI / p.sensor.focal_px();
+  std::map<std::string, double> shift;  // per test point: light, distance, angle
+  for (int c = 0; c < d.num_cells(); ++c) {
+    const double by = moved.cells[c].angle_deg - d.cells[c].angle_deg;
+    EXPECT_LE(std::fabs(by), 0.5 * px_deg + 1e-12);
+    EXPECT_EQ(moved.cells[c].name, d.cells[c].name);
+    const std::string point = d.cells[c].light + "|" + std::to_string(d.cells[c].distance_m) +
+                              "|" + std::to_string(d.cells[c].angle_deg);
+    const auto [it, first] = shift.emplace(point, by);
+    if (!first) {
+      EXPECT_EQ(it->second, by) << d.cells[c].name << ": one draw a test point";
+    }
+  }
+  ASSERT_EQ(shift.size(), 3u);
+  EXPECT_NE(shift.begin()->second, std::next(shift.begin())->second);
+  const std::vector<double> base_moved = SimulateValues({p}, moved, nominal);
   const int kk = d.num_metrics();
   const int valid_k = static_cast<int>(
       std::find(d.metrics.begin(), d.metrics.end(), kValidPct) - d.metrics.begin());
   ASSERT_LT(valid_k, kk);
   const Surface &sa = a.surfaces[0], &sb = b.surfaces[0];
-  int phased = 0;
+  int differ = 0;
   for (int node = 0; node < sb.num_nodes; ++node) {
     const std::vector<double> values{cand[0].axes[0].nodes[node]};
     if (IsNeutral(cand[0], values)) continue;
     sim::SimParams q = p;
     ASSERT_TRUE(sim::BuildDepartures({SpecAt(cand[0], values)}, &q.departures, &why)) << why;
-    std::vector<std::vector<double>> at;
-    const std::vector<double> whole = SimulateValues({q}, d, three, nullptr, &at);
+    const std::vector<double> at = SimulateValues({q}, moved, nominal);
     for (int c = 0; c < d.num_cells(); ++c)
       for (int k = 0; k < kk; ++k) {
         const size_t o = static_cast<size_t>(c) * kk + k;
@@ -356,17 +373,15 @@ TEST(Simulations, TheValidShareOfAWindowMoverIsItsMeanOverThePhases) {
           EXPECT_EQ(va, vb) << d.cells[c].name << " node " << node;
           continue;
         }
-        if (std::isnan(whole[o])) continue;  // a gap of the grid, filled from a neighbour
-        const double expected = b.base[o] + ((whole[o] - b.base[o]) + (at[0][c] - base_at[0][c]) +
-                                             (at[1][c] - base_at[1][c])) / 3;
-        EXPECT_NEAR(vb, expected, 1e-9) << d.cells[c].name << " node " << node;
-        EXPECT_EQ(va, whole[o]);
-        phased += std::fabs(vb - va) > 1e-6;
+        if (std::isnan(at[o])) continue;  // a gap of the grid, filled from a neighbour
+        EXPECT_NEAR(vb, b.base[o] + (at[o] - base_moved[o]), 1e-9)
+            << d.cells[c].name << " node " << node;
+        differ += std::fabs(vb - va) > 1e-6;
       }
   }
-  EXPECT_GT(phased, 0) << "the phases read other steps somewhere";
-  three.window_phase_px = -0.1;
-  EXPECT_THROW(SimulateDesign(p, d, cand, three), std::invalid_argument);
+  EXPECT_GT(differ, 0) << "other phases, other steps";
+  lateral.lateral_phase_px = -1;
+  EXPECT_THROW(SimulateDesign(p, d, cand, lateral), std::invalid_argument);
 }
 
 // The emitter's gain alone changes nothing with the emitter off: its nodes simulate the

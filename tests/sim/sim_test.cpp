@@ -467,45 +467,6 @@ TEST(StereoSim, SpillWidthsTogetherAreEachWidthAlone) {
   EXPECT_THROW(SimulateMetricsSpills(base, MakeCell(4, 0), mp, {1, -1}), std::invalid_argument);
 }
 
-// The valid share read at other margins from the measured region's frames: the measured
-// metrics are unchanged by asking, the share at the measured margin is the measured one, and at
-// another margin it is what a run drawn at that margin reads (its own footprint and plane; equal
-// on these cells), on the emitter's, a far panel's and an offset's cells.
-TEST(StereoSim, ValidShareAtOtherMarginsIsThoseMarginsRegions) {
-  const SimParams base = Base(0.1, 0.2, 6);
-  using M = records::PanelMetrics;
-  constexpr double M::*kColumns[] = {
-      &M::mean_m,          &M::median_m,      &M::plane_std_m,    &M::valid_pct,
-      &M::normal_tilt_deg, &M::panel_width_m, &M::region_px,      &M::temporal_std_m};
-  MetricsParams plain;
-  MetricsParams asked = plain;
-  asked.valid_share_margins_px = {1.0 / 6, 0.5, 5.0 / 6, 2.5};
-  const SimParams offset = With(base, {{"disparity_offset", {{"delta_px", 0.3}}}});
-  int differ = 0;
-  for (const SimParams& p : {base, offset})
-    for (const Cell& c : {MakeCell(4, 0), MakeCell(16, 35, "HD", true), MakeCell(12, 10)}) {
-      const CellMetricsResult a = SimulateMetrics(p, c, plain), b = SimulateMetrics(p, c, asked);
-      ASSERT_TRUE(a.metrics.ok()) << c.name << ": " << a.metrics.message;
-      for (double M::*col : kColumns) EXPECT_EQ(a.metrics.*col, b.metrics.*col) << c.name;
-      EXPECT_TRUE(a.valid_pct_at_margins.empty());
-      ASSERT_EQ(b.valid_pct_at_margins.size(), 4u);
-      EXPECT_EQ(b.valid_pct_at_margins[1], b.metrics.valid_pct) << c.name;
-      for (size_t i : {0, 2, 3}) {
-        MetricsParams at = plain;
-        at.region_margin_px = asked.valid_share_margins_px[i];
-        const CellMetricsResult alone = SimulateMetrics(p, c, at);
-        ASSERT_TRUE(alone.metrics.ok()) << c.name;
-        EXPECT_NEAR(b.valid_pct_at_margins[i], alone.metrics.valid_pct, 0.05)
-            << c.name << " margin " << at.region_margin_px;
-        differ += b.valid_pct_at_margins[i] != b.metrics.valid_pct;
-      }
-    }
-  EXPECT_GE(differ, 10) << "other margins, other regions";
-  MetricsParams bad = plain;
-  bad.valid_share_margins_px = {-1};
-  EXPECT_THROW(SimulateMetrics(base, MakeCell(4, 0), bad), std::invalid_argument);
-}
-
 // The k-th smallest by radix selection is std::nth_element's, on values with ties, zeros,
 // infinities and subnormals, values apart in their last bits alone (the last, 9-bit pass), and
 // (by nth_element itself) on negative values and −0.
