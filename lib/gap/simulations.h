@@ -93,7 +93,6 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
 // fixed by base's seed): SimulateOptions::lateral_phase_px's.
 Design LateralPhases(const Design& d, const sim::SimParams& base, double shift_px);
 
-
 // The same with one parameter set at each width of the region_spill effect (params' own width
 // is not used): [w] is SimulateValues({params with region_spill_px = spills_px[w]}). The widths
 // share each cell's sensor, footprint frames and measured plane (sim::SimulateMetricsSpills).
