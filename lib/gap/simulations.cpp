@@ -113,11 +113,14 @@ sim::SensorParams ListScenarios(const sim::SensorParams& sensor, const Design& d
 
 namespace {
 
-// SimulateValues at each width of spills_px, or at the parameters' own width when it is empty.
+// SimulateValues at each width of spills_px, or at the parameters' own width when it is empty;
+// with valid_only, the valid share alone is measured (sim::MetricsParams::valid_share_only), the
+// other metrics left missing.
 std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams>& params,
                                                 const Design& d, const SimulateOptions& options,
                                                 const std::vector<double>& spills_px,
-                                                std::vector<double>* depth_m) {
+                                                std::vector<double>* depth_m,
+                                                bool valid_only = false) {
   const int k_count = d.num_metrics();
   const size_t widths = spills_px.empty() ? 1 : spills_px.size();
   std::vector<std::vector<double>> out(
@@ -127,6 +130,7 @@ std::vector<std::vector<double>> SimulateTables(const std::vector<sim::SimParams
   mp.frames = options.frames;
   mp.threads = options.threads;
   mp.region_margin_px = options.region_margin_px;
+  mp.valid_share_only = valid_only;
   const int groups = params.size() == 1 ? 1 : d.num_scenarios();
   if (params.empty() || (params.size() != 1 && static_cast<int>(params.size()) != groups))
     throw std::invalid_argument("SimulateValues: one parameter set, or one per scenario");
@@ -207,11 +211,13 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
                        std::any_of(candidates.begin(), candidates.end(),
                                    [](const Candidate& c) { return c.moves_window; });
   const Design lateral_d = lateral ? LateralPhases(d, base, options.lateral_phase_px) : d;
-  std::vector<double> base_lateral;
-  if (lateral) {
+  // Only the valid share of these runs is read: the metrics kernel is left out of them.
+  auto valid_at_lateral = [&](const sim::SimParams& p) {
     ++s.runs;
-    base_lateral = SimulateValues({base}, lateral_d, options);
-  }
+    return std::move(SimulateTables({p}, lateral_d, options, {}, nullptr, true)[0]);
+  };
+  std::vector<double> base_lateral;
+  if (lateral) base_lateral = valid_at_lateral(base);
   const size_t obs = s.base.size();
 
   // The calibration's Jacobian: every scenario nudged at once (each cell sees only its own).
@@ -320,8 +326,7 @@ Simulations SimulateDesign(const sim::SimParams& base_in, const Design& d,
           group.size() == 1 ? std::vector<std::vector<double>>{run(p)}
                             : SimulateValuesSpills(p, d, options, spills);
       if (lateral && cand.moves_window && group.size() == 1) {
-        ++s.runs;
-        const std::vector<double> at = SimulateValues({p}, lateral_d, options);
+        const std::vector<double> at = valid_at_lateral(p);
         for (size_t c = 0; c < d.cells.size(); ++c) {
           const size_t o = c * k_count + valid_k;
           if (std::isfinite(at[o]) && std::isfinite(base_lateral[o]))

@@ -201,6 +201,35 @@ void MeasureRegion(const StereoSim& sim, const MetricsParams& mp, int frames, in
     return;
   }
 
+  if (mp.valid_share_only) {
+    // The kernel's valid share (RegionMetrics::Finish): the valid samples over the region's
+    // pixels times the frames; no valid sample is no panel.
+    std::uint64_t samples = 0;
+    std::size_t frames_with_depth = 0;
+    auto add = [&](const std::uint16_t* frame) {
+      std::uint64_t valid = 0;
+      for (std::size_t q = 0; q < pixels.size(); ++q) valid += frame[q] != 0;
+      samples += valid;
+      frames_with_depth += valid > 0;
+    };
+    for (int k = 0; k < pooled_frames; ++k)
+      add(stored.data() + static_cast<std::size_t>(k) * pixels.size());
+    std::vector<std::uint16_t> counts;
+    for (int k = pooled_frames; k < frames; ++k) {
+      sim.RenderPixels(k, pixels, &counts);
+      add(counts.data());
+    }
+    m.frames = static_cast<double>(frames_with_depth);
+    m.valid_pct = 100.0 * static_cast<double>(samples) /
+                  (static_cast<double>(pixels.size()) * static_cast<double>(frames));
+    m.hole_rate_pct = 100.0 - m.valid_pct;
+    if (samples == 0) {
+      m.status = "no_panel";
+      m.message = "no valid depth in the panel region";
+    }
+    return;
+  }
+
   // The frames' region pixels go through the metrics kernel, as panel_extract's do.
   metrics::KernelParams kp;
   kp.baseline_m = s.baseline_m;

@@ -24,6 +24,11 @@ struct MetricsParams {
   metrics::PanelPixelParams region;  // the decision of the panel's pixels
   int frames = 0;            // 0: the protocol's
   int threads = 1;           // recordings evaluated in parallel (results do not depend on it)
+  // The region decided and its frames rendered as ever, but only the valid share measured
+  // (valid_pct, hole_rate_pct, region_px and frames, the kernel's values bit for bit; every other
+  // metric left missing): what a caller that reads the valid share alone needs, without the
+  // metrics kernel.
+  bool valid_share_only = false;
 
   bool IsValid(std::string* why) const;
 };

@@ -467,6 +467,46 @@ TEST(StereoSim, SpillWidthsTogetherAreEachWidthAlone) {
   EXPECT_THROW(SimulateMetricsSpills(base, MakeCell(4, 0), mp, {1, -1}), std::invalid_argument);
 }
 
+// The valid share alone (MetricsParams::valid_share_only) is the kernel's, bit for bit: the
+// valid share, hole rate, frames and region, on decided and drawn regions, with frames beyond
+// the pooled ones and without; every other column missing; a recording without valid depth is
+// no panel either way.
+TEST(StereoSim, TheValidShareAloneIsTheKernels) {
+  using M = records::PanelMetrics;
+  constexpr double M::*kShared[] = {&M::valid_pct, &M::hole_rate_pct, &M::frames, &M::region_px};
+  constexpr double M::*kLeft[] = {&M::mean_m,          &M::median_m,       &M::plane_std_m,
+                                  &M::normal_tilt_deg, &M::panel_width_m, &M::temporal_std_m};
+  const SimParams base = Base(0.1, 0.3, 9);
+  const SimParams spill =
+      With(base, {{"region_spill", {{"width_px", 3}, {"background_rel", 1.5}}}});
+  const SimParams holes = With(base, {{"invalidation_gain", {{"gain", 4}}}});
+  int checked = 0;
+  for (int pooled : {4, 0})
+    for (const SimParams& p : {base, spill, holes})
+      for (const Cell& c : {MakeCell(4, 0), MakeCell(16, 35, "HD", true), MakeCell(12, 20)}) {
+        MetricsParams all;
+        all.region.pooled_frames = pooled;
+        MetricsParams alone = all;
+        alone.valid_share_only = true;
+        const M a = SimulateMetrics(p, c, all).metrics, b = SimulateMetrics(p, c, alone).metrics;
+        ASSERT_TRUE(a.ok()) << c.name << ": " << a.message;
+        EXPECT_EQ(b.status, "ok") << c.name << ": " << b.message;
+        for (double M::*col : kShared) EXPECT_EQ(a.*col, b.*col) << c.name;
+        for (double M::*col : kLeft) EXPECT_TRUE(std::isnan(b.*col)) << c.name;
+        EXPECT_GT(a.valid_pct, 0);
+        EXPECT_LT(a.valid_pct, 100);
+        ++checked;
+      }
+  EXPECT_EQ(checked, 18);
+  const SimParams blind = Base(0.1, 1.0, 9);
+  MetricsParams alone;
+  alone.valid_share_only = true;
+  const M a = SimulateMetrics(blind, MakeCell(8, 0)).metrics;
+  const M b = SimulateMetrics(blind, MakeCell(8, 0), alone).metrics;
+  EXPECT_FALSE(a.ok());
+  EXPECT_EQ(a.status, b.status);
+}
+
 // The k-th smallest by radix selection is std::nth_element's, on values with ties, zeros,
 // infinities and subnormals, values apart in their last bits alone (the last, 9-bit pass), and
 // (by nth_element itself) on negative values and −0.
