@@ -50,6 +50,9 @@ struct MetricInfo {
   // every simulation is a fresh draw of those steps (a candidate's surface is smoothed along
   // its parameters in these metrics, smooth.h).
   bool window = false;
+  // A window metric whose steps a range law's surface reads averaged over placement
+  // (smooth.h: AverageOverPlacement); not the plane's spread, which follows the depth itself.
+  bool placement_average = false;
 };
 const MetricInfo& InfoOf(int metric);
 // The metric of a row, transformed; NaN where the row does not have it.

@@ -190,7 +190,7 @@ Surface AverageOverPlacement(const Design& d, const Simulations& s, const Surfac
           w[static_cast<size_t>(j) * n + i] = std::exp(-0.5 * u * u);
         }
       for (int k = 0; k < kk; ++k) {
-        if (!InfoOf(d.metrics[k]).window) continue;
+        if (!InfoOf(d.metrics[k]).placement_average) continue;
         const double* in = &surface.table[(static_cast<size_t>(c) * kk + k) * surface.num_nodes];
         double* row = &out.table[(static_cast<size_t>(c) * kk + k) * surface.num_nodes];
         std::vector<double> avg(n);

@@ -2299,7 +2299,11 @@ TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
       }
   s.surfaces.push_back(surf);
   SmoothSurfaces(d, &s);
-  double raw_sq = 0, smooth_sq = 0;
+  // The width and the plane's spread (window metrics) come closer to their trend; the median,
+  // the temporal spread and the valid share keep their nodes.
+  EXPECT_TRUE(InfoOf(kPlaneStd).window);
+  EXPECT_FALSE(InfoOf(kTemporalStd).window || InfoOf(kValidPct).window);
+  std::map<int, std::pair<double, double>> sq;  // metric → raw, smoothed
   for (int c = 0; c < d.num_cells(); ++c)
     for (int k = 0; k < kk; ++k)
       for (int j = 0; j < n; ++j) {
@@ -2308,12 +2312,14 @@ TEST(Smooth, OnlyTheWindowsMetricsAndNeverTheNeutralNode) {
           EXPECT_EQ(s.surfaces[0].table[i], surf.table[i]) << InfoOf(d.metrics[k]).name;
           continue;
         }
-        if (d.metrics[k] != kPanelWidth) continue;
-        raw_sq += (surf.table[i] - trend[i]) * (surf.table[i] - trend[i]);
-        smooth_sq += (s.surfaces[0].table[i] - trend[i]) * (s.surfaces[0].table[i] - trend[i]);
+        auto& [raw, smooth] = sq[d.metrics[k]];
+        raw += (surf.table[i] - trend[i]) * (surf.table[i] - trend[i]);
+        smooth += (s.surfaces[0].table[i] - trend[i]) * (s.surfaces[0].table[i] - trend[i]);
       }
-  EXPECT_GT(raw_sq, 0);
-  EXPECT_LT(smooth_sq, 0.7 * raw_sq);
+  for (int metric : {kPanelWidth, kPlaneStd}) {
+    EXPECT_GT(sq[metric].first, 0) << InfoOf(metric).name;
+    EXPECT_LT(sq[metric].second, 0.7 * sq[metric].first) << InfoOf(metric).name;
+  }
 }
 
 // A range law's window metrics averaged over placement: a disparity offset whose width is the
@@ -2364,6 +2370,8 @@ TEST(Smooth, ARangeLawsWindowIsAveragedOverPlacement) {
         double& v = surf.table[(static_cast<size_t>(c) * kk + k) * n + j];
         if (d.metrics[k] == kMedianBias) v = zm - z;
         if (d.metrics[k] == kPanelWidth) v = width_at(zm);
+        // The plane's spread, a window metric that follows the depth itself: kept as it is.
+        if (d.metrics[k] == kPlaneStd) v = 2 * std::log(zm / z) + 0.05 * width_at(zm);
       }
     }
   std::vector<double> rel_of_cell(d.num_cells(), rel);
