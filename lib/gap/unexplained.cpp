@@ -207,9 +207,13 @@ std::vector<double> OwnDepartures(const GapModel& m, const std::vector<double>& 
 // over all of them is what the drawn signs are held against, so the extra laws are paid for in
 // the p-value. Its p-value; *step_from: the step's first distance when a step explains the most
 // by more than a parameter's price, also against each smooth law in one light alone, else NaN.
+// With `best_light` (a table of two lights or more), each light's smooth laws (zero in the other
+// lights) are among the laws tested too, and *best_light names the light whose law explains the
+// most when one does (else ""): a disparity offset at sunset alone is a law ∝ D² at sunset,
+// which the whole table's laws read as a step from the middle distance at half its size.
 double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
                         const std::vector<std::vector<int>>& blocks, const RestParams& params,
-                        double* step_from) {
+                        double* step_from, std::string* best_light = nullptr) {
   const Design& d = m.design();
   const int kk = d.num_metrics();
   std::vector<double> levels;  // the distances of the blocks' cells
@@ -219,13 +223,25 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   std::sort(levels.begin(), levels.end());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
   const size_t nf = 3 + (levels.size() > 1 ? levels.size() - 1 : 0);
-  auto law = [&](size_t j, double dd) {
+  std::vector<std::string> lights;  // each light's three smooth laws follow the nf laws
+  for (const auto& b : blocks)
+    for (int c : b)
+      if (c >= 0 && std::find(lights.begin(), lights.end(), d.cells[c].light) == lights.end())
+        lights.push_back(d.cells[c].light);
+  if (!best_light || lights.size() < 2) lights.clear();
+  const size_t nl = nf + 3 * lights.size();
+  auto law = [&](size_t j, const sim::Cell& cell) {
+    const double dd = cell.distance_m;
+    if (j >= nf) {
+      if (cell.light != lights[(j - nf) / 3]) return 0.0;
+      j = (j - nf) % 3;
+    }
     return j == 0 ? 1.0 : j == 1 ? dd : j == 2 ? dd * dd : dd >= levels[j - 2] ? 1.0 : 0.0;
   };
   // Per test point and law: Σ w·f·r and Σ w·f².
   const size_t nb = blocks.size();
-  std::vector<std::vector<double>> wfr(nb, std::vector<double>(nf, 0.0));
-  std::vector<double> wff(nf, 0.0);
+  std::vector<std::vector<double>> wfr(nb, std::vector<double>(nl, 0.0));
+  std::vector<double> wff(nl, 0.0);
   // Per light, the smooth laws' Σ w·f·r and Σ w·f² over its test points.
   std::map<std::string, std::array<double, 6>> light_sums;
   for (size_t b = 0; b < nb; ++b)
@@ -236,8 +252,8 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
       const double w = 1.0 / (m.noise(o) * m.noise(o)), r = m.y(o) - mu[o];
       std::array<double, 6>& in_light =
           light_sums.emplace(d.cells[c].light, std::array<double, 6>{}).first->second;
-      for (size_t j = 0; j < nf; ++j) {
-        const double f = law(j, d.cells[c].distance_m);
+      for (size_t j = 0; j < nl; ++j) {
+        const double f = law(j, d.cells[c]);
         wfr[b][j] += w * f * r, wff[j] += w * f * f;
         if (j < 3) in_light[j] += w * f * r, in_light[3 + j] += w * f * f;
       }
@@ -254,7 +270,7 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   };
   size_t which = 0, ignored = 0;
   const std::vector<int> as_measured(nb, 1);
-  const double observed = stat(as_measured, nf, &which);
+  const double observed = stat(as_measured, nl, &which);
   // The form described: a step's distance is one more thing chosen, so a step is named only
   // when it explains more than the best smooth law by ln(test points), BIC's price of a
   // parameter (else an offset's D² would often read as a step from the middle). The smooth laws
@@ -263,7 +279,8 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   // at sunset only, under placement scatter, was read as a step in 5 of 40 tables, and a range
   // law kept for it dropped; in 1 of 40 with each light's laws).
   *step_from = NAN;
-  if (which >= 3) {
+  if (best_light) *best_light = which >= nf ? lights[(which - nf) / 3] : "";
+  if (which >= 3 && which < nf) {
     double smooth = stat(as_measured, 3, &ignored);
     for (const auto& [light, sums] : light_sums)
       for (size_t j = 0; j < 3; ++j)
@@ -275,7 +292,7 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   int as_large = 0;
   for (int i = 0; i < params.permutations; ++i) {
     for (size_t b = 0; b < nb; ++b) sign[b] = rng() % 2 ? 1 : -1;
-    as_large += stat(sign, nf, &ignored) >= observed;
+    as_large += stat(sign, nl, &ignored) >= observed;
   }
   return (1.0 + as_large) / (1.0 + params.permutations);
 }
@@ -398,11 +415,17 @@ std::vector<Unexplained> DescribeRest(const GapModel& m, const std::vector<doubl
     // as wholes: a placement is as likely short as long.
     if (d.metrics[k] != kMedianBias || pe.empty()) continue;
     double step_from = NAN;
-    const double p_shared = SharedDepartureP(m, mu, k, blocks, params, &step_from);
+    std::string light;
+    const double p_shared = SharedDepartureP(m, mu, k, blocks, params, &step_from, &light);
     if (p_shared >= params.alpha / kk) continue;
     std::vector<int> cells;
     for (int c = 0; c < d.num_cells(); ++c)
-      if (!(d.cells[c].distance_m < step_from)) cells.push_back(c);  // NaN: every cell
+      if (!(d.cells[c].distance_m < step_from) && (light.empty() || d.cells[c].light == light))
+        cells.push_back(c);  // step_from NaN: every cell (of the light)
+    if (!light.empty()) {  // one light's smooth law: its form read over that light's cells
+      out.push_back(Describe(m, mu, pe, z, k, "light " + light, cells, total, p_shared));
+      continue;
+    }
     if (std::isnan(step_from)) {
       out.push_back(Describe(m, mu, pe, z, k, "every recording", cells, total, p_shared));
       continue;

@@ -31,10 +31,12 @@ struct RestParams {
 // and emitter slot of another test point), so that heavy-tailed, skewed or bounded residuals
 // and the placement a test point's recordings share are the reference, not a normal law.
 // Permutations keep what the whole table shares; in the median bias, a departure of every test
-// point (constant, ∝ D or ∝ D²), or of every test point from some distance on (a step: a return
-// the camera mixes in beyond some range), is tested against signs drawn for test points as
-// wholes (a placement is as likely short as long), the best of those laws against the best of
-// the drawn tables', and described as "every recording" or "distance ≥ X m".
+// point (constant, ∝ D or ∝ D²), of every test point from some distance on (a step: a return
+// the camera mixes in beyond some range), or of every test point of one light (a smooth law in
+// that light, none in the others: an offset at sunset alone) is tested against signs drawn for
+// test points as wholes (a placement is as likely short as long), the best of those laws
+// against the best of the drawn tables', and described as "every recording", "distance ≥ X m"
+// or "light L".
 // Test points the placement estimate flags in the median bias (a panel set off by more than its
 // law allows) are listed too, as one test point each, sized from the other test points of its
 // light and distance. Sorted by χ², largest first.
