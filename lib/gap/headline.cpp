@@ -457,8 +457,9 @@ std::string EvidenceMarkdown(const DiagnoseResult& r, const DiagnoseParams& p) {
     o << "A metric's rest is listed where its best group of cells departs beyond chance (against "
          "tables with their test points permuted as wholes, p < "
       << Num(p.alpha) << " / metrics). The median bias's rest shared by every recording "
-      << "(constant, ∝ D or ∝ D²) is judged against signs drawn for test points as wholes, and a "
-      << "test point beyond the placement law is listed too.\n\n"
+      << "(constant, ∝ D or ∝ D², or a step from a distance on), or by every recording of one "
+      << "light, is judged against signs drawn for test points as wholes, and a test point "
+      << "beyond the placement law is listed too.\n\n"
       << "| metric | where | size [95 %] | form | at the far end | share of its rest | χ² / "
          "cells | p |\n|---|---|---|---|---|---|---|---|\n";
   for (const Unexplained& u : r.unexplained)
