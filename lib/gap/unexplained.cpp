@@ -1,7 +1,6 @@
 #include "gap/unexplained.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -228,8 +227,9 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
     for (int c : b)
       if (c >= 0 && std::find(lights.begin(), lights.end(), d.cells[c].light) == lights.end())
         lights.push_back(d.cells[c].light);
-  if (!best_light || lights.size() < 2) lights.clear();
+  if (lights.size() < 2) lights.clear();  // one light's laws are the whole table's
   const size_t nl = nf + 3 * lights.size();
+  const size_t tested = best_light ? nl : nf;  // each light's laws: in the test, or the veto's
   auto law = [&](size_t j, const sim::Cell& cell) {
     const double dd = cell.distance_m;
     if (j >= nf) {
@@ -242,26 +242,21 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   const size_t nb = blocks.size();
   std::vector<std::vector<double>> wfr(nb, std::vector<double>(nl, 0.0));
   std::vector<double> wff(nl, 0.0);
-  // Per light, the smooth laws' Σ w·f·r and Σ w·f² over its test points.
-  std::map<std::string, std::array<double, 6>> light_sums;
   for (size_t b = 0; b < nb; ++b)
     for (int c : blocks[b]) {
       if (c < 0) continue;
       const size_t o = static_cast<size_t>(c) * kk + k;
       if (!m.valid(o) || !std::isfinite(mu[o])) continue;
       const double w = 1.0 / (m.noise(o) * m.noise(o)), r = m.y(o) - mu[o];
-      std::array<double, 6>& in_light =
-          light_sums.emplace(d.cells[c].light, std::array<double, 6>{}).first->second;
       for (size_t j = 0; j < nl; ++j) {
         const double f = law(j, d.cells[c]);
         wfr[b][j] += w * f * r, wff[j] += w * f * f;
-        if (j < 3) in_light[j] += w * f * r, in_light[3 + j] += w * f * f;
       }
     }
-  // The best of the first `laws` laws under the signs, and which.
-  auto stat = [&](const std::vector<int>& sign, size_t laws, size_t* which) {
+  // The best of laws [first, last) under the signs, and which.
+  auto stat = [&](const std::vector<int>& sign, size_t first, size_t last, size_t* which) {
     double best = 0;
-    for (size_t j = 0; j < laws; ++j) {
+    for (size_t j = first; j < last; ++j) {
       double sum = 0;
       for (size_t b = 0; b < nb; ++b) sum += sign[b] * wfr[b][j];
       if (wff[j] > 0 && sum * sum / wff[j] > best) best = sum * sum / wff[j], *which = j;
@@ -270,7 +265,7 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   };
   size_t which = 0, ignored = 0;
   const std::vector<int> as_measured(nb, 1);
-  const double observed = stat(as_measured, nl, &which);
+  const double observed = stat(as_measured, 0, tested, &which);
   // The form described: a step's distance is one more thing chosen, so a step is named only
   // when it explains more than the best smooth law by ln(test points), BIC's price of a
   // parameter (else an offset's D² would often read as a step from the middle). The smooth laws
@@ -281,10 +276,8 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   *step_from = NAN;
   if (best_light) *best_light = which >= nf ? lights[(which - nf) / 3] : "";
   if (which >= 3 && which < nf) {
-    double smooth = stat(as_measured, 3, &ignored);
-    for (const auto& [light, sums] : light_sums)
-      for (size_t j = 0; j < 3; ++j)
-        if (sums[3 + j] > 0) smooth = std::max(smooth, sums[j] * sums[j] / sums[3 + j]);
+    const double smooth =
+        std::max(stat(as_measured, 0, 3, &ignored), stat(as_measured, nf, nl, &ignored));
     if (observed - smooth > std::log(static_cast<double>(nb))) *step_from = levels[which - 2];
   }
   std::mt19937_64 rng(params.seed + 1);
@@ -292,7 +285,7 @@ double SharedDepartureP(const GapModel& m, const std::vector<double>& mu, int k,
   int as_large = 0;
   for (int i = 0; i < params.permutations; ++i) {
     for (size_t b = 0; b < nb; ++b) sign[b] = rng() % 2 ? 1 : -1;
-    as_large += stat(sign, nl, &ignored) >= observed;
+    as_large += stat(sign, 0, tested, &ignored) >= observed;
   }
   return (1.0 + as_large) / (1.0 + params.permutations);
 }
