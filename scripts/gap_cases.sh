@@ -21,14 +21,18 @@
 # written to OUT_DIR/seeds.md, then what the range-law cases' tables allow: the smallest
 # standard error of each size under the placement scatter and, seed by seed, whether the
 # table's own medians put the sizes within 20 % (scripts/gap_bounds.py, OUT_DIR/bounds.md).
+# --first-seed S starts them at S (S to S + N - 1): seeds no change was chosen on, for a figure
+# no choice has seen (a case's table is drawn at S + 999 + its index, so from S = 101 on no table
+# of seeds 1 to 25 comes again).
 # About 5 minutes a seed on 2 cores.
-# Usage: scripts/gap_cases.sh [BUILD_DIR] [OUT_DIR] [--no-field] [--seeds N]
+# Usage: scripts/gap_cases.sh [BUILD_DIR] [OUT_DIR] [--no-field] [--seeds N] [--first-seed S]
 #   OUT_DIR/cases.md is written too; the field bags go to OUT_DIR/field (or a temporary folder).
 set -euo pipefail
 trap 'echo "gap_cases: failed at line $LINENO" >&2' ERR
 cd "$(dirname "$0")/.."
 FIELD=1
 SEEDS=0
+FIRST=1
 ARGS=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -38,10 +42,16 @@ while [ $# -gt 0 ]; do
         { echo "gap_cases: --seeds needs a count >= 1" >&2; exit 2; }
       SEEDS=$2
       shift ;;
+    --first-seed)
+      [ $# -ge 2 ] && [[ "$2" =~ ^[1-9][0-9]*$ ]] ||
+        { echo "gap_cases: --first-seed needs a seed >= 1" >&2; exit 2; }
+      FIRST=$2
+      shift ;;
     *) ARGS+=("$1") ;;
   esac
   shift
 done
+[ "$FIRST" = 1 ] || [ "$SEEDS" != 0 ] || { echo "gap_cases: --first-seed needs --seeds" >&2; exit 2; }
 BUILD_DIR=${ARGS[0]:-${BUILD_DIR:-build}}
 OUT_DIR=${ARGS[1]:-}
 APP="$BUILD_DIR/apps/diagnose_gap"
@@ -70,13 +80,14 @@ if [ "$SEEDS" = 0 ]; then
 fi
 [ -n "$OUT_DIR" ] || { echo "gap_cases: --seeds needs OUT_DIR" >&2; exit 2; }
 TABLES=()
-for ((s = 1; s <= SEEDS; s++)); do
+LAST=$((FIRST + SEEDS - 1))
+for ((s = FIRST; s <= LAST; s++)); do
   SEED_OPTS=("${OPTS[@]}")
   # The --out pair is the seed's own folder.
   for i in "${!SEED_OPTS[@]}"; do
     if [ "${SEED_OPTS[$i]}" = "--out" ]; then SEED_OPTS[$((i + 1))]="$OUT_DIR/seed-$s"; fi
   done
-  echo "gap_cases: seed $s of $SEEDS" >&2
+  echo "gap_cases: seed $s ($FIRST to $LAST)" >&2
   "$APP" --cases --seed "$s" "${SEED_OPTS[@]}" > /dev/null
   TABLES+=("$OUT_DIR/seed-$s/cases.md")
 done
@@ -85,7 +96,7 @@ mv "$OUT_DIR/seeds.md.tmp" "$OUT_DIR/seeds.md"
 cat "$OUT_DIR/seeds.md"
 # What the range-law cases' tables allow, seed by seed (scripts/gap_bounds.py).
 SEED_DIRS=()
-for ((s = 1; s <= SEEDS; s++)); do SEED_DIRS+=("$OUT_DIR/seed-$s"); done
+for ((s = FIRST; s <= LAST; s++)); do SEED_DIRS+=("$OUT_DIR/seed-$s"); done
 .venv/bin/python scripts/gap_bounds.py --tables "${SEED_DIRS[@]}" > "$OUT_DIR/bounds.md.tmp"
 mv "$OUT_DIR/bounds.md.tmp" "$OUT_DIR/bounds.md"
 echo
