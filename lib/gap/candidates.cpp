@@ -66,7 +66,7 @@ std::vector<Candidate> MakeCandidates() {
   Axis width = Continuous("width_px", {1, 2, 3, 5, 8}, NAN, 3);
   width.discrete = true;
   c.push_back({"edge_mixing",
-               {width, Continuous("strength", {0, 0.08, 0.18, 0.3, 0.65, 1.0}, 0, 0.5)}});
+               {width, Continuous("strength", {0, 0.08, 0.18, 0.3, 0.4, 0.5, 0.65, 1.0}, 0, 0.5)}});
   Axis spill = Continuous("width_px", {0, 1, 2, 3, 4, 5}, 0, 2);
   spill.discrete = true;
   c.push_back({"region_spill",
