@@ -573,19 +573,20 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
   RestParams rest;
   rest.alpha = params.alpha;
   r.unexplained = DescribeRest(model, model.Predict(current), r.placement, rest);
+  const int phases = params.simulate.lateral_phase_px > 0 ? 2 : 1;  // SimulateSelection's runs
   if (params.verify) {
     try {
-      const std::vector<double> v = SimulateValues(
-          SelectedParams(sims, base, current, design), design, params.simulate);
+      const std::vector<double> v = SimulateSelection(
+          SelectedParams(sims, base, current, design), design, base, params.simulate);
       r.z_verified = Scaled(model, v);
       r.verified_in = Stat(model, r.z_verified, all);
       r.verified = true;
-      ++r.simulations;
+      r.simulations += phases;
     } catch (const std::exception& e) {
       r.message = std::string("verification skipped: ") + e.what();
     }
   }
-  if (r.nested.run) r.simulations += static_cast<int>(r.nested.folds.size() > 0 ? 1 : 0);
+  if (r.nested.run) r.simulations += r.nested.folds.empty() ? 0 : phases;
   r.success = true;
   return r;
 }

@@ -23,7 +23,7 @@ std::vector<double> SimulateHeld(const Design& d, const Simulations& sims,
   SimulateOptions options = params.simulate;
   options.threads = 1;  // the folds run side by side
   const std::vector<double> v =
-      SimulateValues(SelectedParams(sims, base, fit, d), Subset(d, held), options);
+      SimulateSelection(SelectedParams(sims, base, fit, d), Subset(d, held), base, options);
   std::vector<double> mu(d.real.size(), NAN);
   int i = 0;
   for (int c = 0; c < d.num_cells(); ++c) {

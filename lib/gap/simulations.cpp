@@ -175,6 +175,18 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
   return std::move(SimulateTables(params, d, options, {}, depth_m)[0]);
 }
 
+std::vector<double> SimulateSelection(const std::vector<sim::SimParams>& params,
+                                      const Design& d, const sim::SimParams& base,
+                                      const SimulateOptions& options) {
+  std::vector<double> v = SimulateValues(params, d, options);
+  if (!(options.lateral_phase_px > 0)) return v;
+  const std::vector<double> w =
+      SimulateValues(params, LateralPhases(d, base, options.lateral_phase_px), options);
+  for (size_t i = 0; i < v.size(); ++i)
+    if (std::isfinite(v[i]) && std::isfinite(w[i])) v[i] = 0.5 * (v[i] + w[i]);
+  return v;
+}
+
 std::vector<std::vector<double>> SimulateValuesSpills(const sim::SimParams& params,
                                                       const Design& d,
                                                       const SimulateOptions& options,

@@ -93,6 +93,15 @@ std::vector<double> SimulateValues(const std::vector<sim::SimParams>& params, co
 // fixed by base's seed): SimulateOptions::lateral_phase_px's.
 Design LateralPhases(const Design& d, const sim::SimParams& base, double shift_px);
 
+// A selection's simulation, as the diagnosis checks it against the table (the nested folds'
+// held-out cells, the verification): SimulateValues, and where options.lateral_phase_px > 0
+// the mean of the cells as placed and at their lateral phases (LateralPhases, `base`'s
+// seed): the metrics the panel's window decides move by steps with its sub-pixel phase, and
+// one phase's step is not the selection's.
+std::vector<double> SimulateSelection(const std::vector<sim::SimParams>& params,
+                                      const Design& design, const sim::SimParams& base,
+                                      const SimulateOptions& options);
+
 // The same with one parameter set at each width of the region_spill effect (params' own width
 // is not used): [w] is SimulateValues({params with region_spill_px = spills_px[w]}). The widths
 // share each cell's sensor, footprint frames and measured plane (sim::SimulateMetricsSpills).

@@ -385,6 +385,40 @@ TEST(Simulations, TheValidShareOfAWindowMoverIsReadAtLateralPhases) {
   EXPECT_THROW(SimulateDesign(p, d, cand, lateral), std::invalid_argument);
 }
 
+// A selection is checked against the table (the nested folds' held-out cells, the verification)
+// as the mean of its cells as placed and at their lateral phases, the phases the surfaces read
+// the valid share at: without phases it is the plain simulation, bit for bit.
+TEST(Simulations, ASelectionIsSimulatedAtTwoPhases) {
+  sim::SimParams p = FallbackSensor(47);
+  std::string why;
+  ASSERT_TRUE(sim::BuildDepartures({{"disparity_offset", {{"delta_px", 0.3}}}}, &p.departures,
+                                   &why))
+      << why;
+  std::vector<records::PanelMetrics> rows = Twins({8, 16}, 35, "HD");
+  for (const auto& r : Twins({12}, 0, "HA")) rows.push_back(r);
+  Design d;
+  ASSERT_TRUE(BuildDesign(rows, &d, &why)) << why;
+  SimulateOptions options;
+  options.frames = 4;
+  options.lateral_phase_px = 0;
+  EXPECT_EQ(SimulateSelection({p}, d, p, options), SimulateValues({p}, d, options));
+  options.lateral_phase_px = 0.5;
+  const std::vector<double> nominal = SimulateValues({p}, d, options);
+  const std::vector<double> moved = SimulateValues({p}, LateralPhases(d, p, 0.5), options);
+  const std::vector<double> both = SimulateSelection({p}, d, p, options);
+  ASSERT_EQ(both.size(), nominal.size());
+  int differ = 0;
+  for (size_t o = 0; o < both.size(); ++o) {
+    if (!std::isfinite(nominal[o]) || !std::isfinite(moved[o])) {
+      EXPECT_TRUE(both[o] == nominal[o] || (std::isnan(both[o]) && std::isnan(nominal[o])));
+      continue;
+    }
+    EXPECT_DOUBLE_EQ(both[o], 0.5 * (nominal[o] + moved[o])) << "observation " << o;
+    differ += both[o] != nominal[o];
+  }
+  EXPECT_GT(differ, 0) << "the second phase is simulated";
+}
+
 // The emitter's gain alone changes nothing with the emitter off: its nodes simulate the
 // emitter-on cells alone and take the base's for the others. Every node's table is then what
 // the whole table simulated at that gain gives (a recording listed twice included); and every
