@@ -14,8 +14,9 @@
 #      the summary names both failed units and their logs, that sacct lists every job with the
 #      state expected, and that each job's log is in .snakemake/slurm_logs/ (workflow/README.md).
 #   bash scripts/test_workflow_slurm.sh [BUILD_DIR]     (ctest: workflow_slurm, label slurm)
-# Installs what is missing with `WITH_SLURM=1 scripts/setup.sh`. Exits 77 (skipped) with one
-# line when SLURM cannot be installed or started here (not root, a daemon that does not start);
+# Installs nothing: `WITH_SLURM=1 scripts/setup.sh` does (scripts/test.sh runs it, as root, before
+# ctest), since tests run side by side on one .venv. Exits 77 (skipped) with one line when SLURM is
+# missing or cannot be started here (not root, a daemon that does not start);
 # any other failing check says which on one line and exits 1. KEEP=1 keeps the cluster's folder.
 set -uo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -39,12 +40,8 @@ have_all() {
   done
   "$PYTHON" -c "import snakemake_executor_plugin_slurm" 2>/dev/null
 }
-if ! have_all; then
-  echo "test_workflow_slurm: installing SLURM and its executor (WITH_SLURM=1 scripts/setup.sh)"
-  WITH_SLURM=1 bash "$ROOT/scripts/setup.sh" </dev/null >"$BUILD/setup_slurm.log" 2>&1 ||
-    skip "WITH_SLURM=1 scripts/setup.sh failed: $(tail -1 "$BUILD/setup_slurm.log")"
-  have_all || skip "SLURM, munge, MariaDB or the executor plugin still missing after setup.sh"
-fi
+have_all || skip "SLURM, munge, MariaDB or the SLURM executor missing;" \
+  "install them with WITH_SLURM=1 bash scripts/setup.sh (scripts/test.sh does, as root)"
 
 # --- The cluster, in a temporary folder -------------------------------------------------------
 C=$(mktemp -d /tmp/depthbias-slurm.XXXXXX) || skip "cannot make a temporary folder"
