@@ -31,7 +31,7 @@ installed() {
 before=$(installed)
 status=0
 (cd "$BUILD_DIR" && ctest --output-on-failure -j "${JOBS:-$(nproc)}" --timeout 600) || status=$?
-changed=$(diff <(echo "$before") <(installed) | sed -n 's/^\([<>]\) /\1 /p' || true)
+changed=$(diff <(echo "$before") <(installed) | grep '^[<>]' || true)
 if [ -n "$changed" ]; then
   echo "test: packages changed while the tests ran (< before, > after); a test installs or" \
     "removes packages, which another test running beside it may see half-written:" >&2
