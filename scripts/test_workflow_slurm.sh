@@ -49,7 +49,34 @@ chmod 700 "$C"
 mkdir -p "$C/munge" "$C/state" "$C/spool" "$C/log" "$C/db"
 export SLURM_CONF=$C/slurm.conf
 # Only what was started here is stopped: the workflow's snakemake, the jobs, then the daemons by
-# the pids they wrote.
+# the pids they wrote. The daemons leave this script's process tree, so a kill this script cannot
+# trap (ctest's timeout, KILL) would leave them running: a watchdog outside the tree (setsid)
+# stops them once this script is gone without having stopped them itself.
+cat >"$C/stop_daemons.sh" <<'EOF_STOP'
+C=$1
+if [ -f "$C/slurmctld.pid" ]; then
+  scancel --quiet --user="$(id -un)" >/dev/null 2>&1 || true
+  sleep 1
+fi
+munged --stop --socket="$C/munge/munge.socket" >/dev/null 2>&1 &
+for pidfile in slurmd.pid slurmctld.pid slurmdbd.pid db/mariadbd.pid munge/munged.pid; do
+  pid=$(cat "$C/$pidfile" 2>/dev/null) || continue
+  [ -n "$pid" ] && kill "$pid" 2>/dev/null || continue
+  for _ in $(seq 50); do
+    kill -0 "$pid" 2>/dev/null || break
+    sleep 0.1
+  done
+  kill -9 "$pid" 2>/dev/null || true
+done
+EOF_STOP
+cat >"$C/watchdog.sh" <<'EOF_WATCH'
+C=$1 PARENT=$2
+while kill -0 "$PARENT" 2>/dev/null && [ ! -e "$C/stopped" ]; do sleep 2; done
+[ -d "$C" ] && [ ! -e "$C/stopped" ] || exit 0
+touch "$C/stopped"
+bash "$C/stop_daemons.sh" "$C"
+[ "${KEEP:-0}" = "1" ] || rm -rf "$C"
+EOF_WATCH
 SNAKE_PID=
 stop_cluster() {
   if [ -n "$SNAKE_PID" ] && kill -0 "$SNAKE_PID" 2>/dev/null; then
@@ -57,21 +84,8 @@ stop_cluster() {
     sleep 5
     kill -KILL "$SNAKE_PID" 2>/dev/null || true
   fi
-  if [ -f "$C/slurmctld.pid" ]; then
-    scancel --quiet --user="$(id -un)" >/dev/null 2>&1 || true
-    sleep 1
-  fi
-  local pidfile pid
-  munged --stop --socket="$C/munge/munge.socket" >/dev/null 2>&1 &
-  for pidfile in slurmd.pid slurmctld.pid slurmdbd.pid db/mariadbd.pid munge/munged.pid; do
-    pid=$(cat "$C/$pidfile" 2>/dev/null) || continue
-    [ -n "$pid" ] && kill "$pid" 2>/dev/null || continue
-    for _ in $(seq 50); do
-      kill -0 "$pid" 2>/dev/null || break
-      sleep 0.1
-    done
-    kill -9 "$pid" 2>/dev/null || true
-  done
+  touch "$C/stopped"  # the watchdog leaves it to this
+  bash "$C/stop_daemons.sh" "$C"
   if [ "${KEEP:-0}" = "1" ]; then
     echo "test_workflow_slurm: cluster folder kept: $C"
   else
@@ -81,6 +95,8 @@ stop_cluster() {
 trap stop_cluster EXIT
 trap 'exit 130' INT
 trap 'exit 143' TERM
+setsid -f bash "$C/watchdog.sh" "$C" $$ </dev/null >/dev/null 2>&1 ||
+  skip "cannot start the watchdog that stops the cluster (setsid)"
 started() {  # started WHAT LOG: the daemon's last log line, as a skip
   skip "$1 did not start: $(grep -v '^\s*$' "$2" 2>/dev/null | tail -1 || echo "no log")"
 }
