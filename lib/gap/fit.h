@@ -187,6 +187,9 @@ class GapModel {
   GapModel JointPlacement() const;
   // The same model with FitSettings::joint_window on (1a).
   GapModel JointWindow() const;
+  // The same model read against y − c: a part of the departures the terms' sum does not carry,
+  // found by simulating the terms together (select.h, SimulatedBeside). c NaN: y as it is.
+  GapModel Shifted(const std::vector<double>& c) const;
 
   int NumGroups(const Term& term) const;
   int Group(const Term& term, int cell) const;

@@ -293,6 +293,13 @@ GapModel GapModel::JointWindow() const {
   return out;
 }
 
+GapModel GapModel::Shifted(const std::vector<double>& c) const {
+  GapModel out = *this;
+  for (size_t o = 0; o < out.y_.size() && o < c.size(); ++o)
+    if (std::isfinite(c[o])) out.y_[o] -= c[o];
+  return out;
+}
+
 GapModel GapModel::JointPlacement() const {
   GapModel out = *this;
   out.settings_.joint_placement = true;

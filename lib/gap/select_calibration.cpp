@@ -1,6 +1,7 @@
 // The rule on a kept effect and the effects along the calibration (select.h, AlongCalibration).
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -93,6 +94,32 @@ std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
                          " without)");
   }
   return keep;
+}
+
+ModelFit SimulatedBeside(const GapModel& model, const ModelFit& fit, const TermFit& beside,
+                         const std::vector<char>& train, const sim::SimParams& base,
+                         const SimulateOptions& options, int rounds, int* runs) {
+  ModelFit with = FitBeside(model, fit, beside, train);
+  const int phases = options.lateral_phase_px > 0 ? 2 : 1;  // SimulateSelection's runs
+  for (int i = 0; i < rounds && with.success; ++i) {
+    std::vector<double> c;
+    try {
+      c = SimulateSelection(SelectedParams(model.sims(), base, with, model.design()),
+                            model.design(), base, options);
+    } catch (const std::exception&) {
+      break;
+    }
+    *runs += phases;
+    const std::vector<double> mu = model.Predict(with);
+    for (size_t o = 0; o < c.size(); ++o) c[o] -= mu[o];
+    ModelFit start = fit;  // the fit with `beside` removed, as FitBeside takes it
+    start.terms.assign(with.terms.begin(), with.terms.end() - 1);
+    start.nuisance = with.nuisance;
+    ModelFit next = FitBeside(model.Shifted(c), start, with.terms.back(), train);
+    if (!next.success) break;
+    with = std::move(next);
+  }
+  return with;
 }
 
 }  // namespace depthbias::gap
