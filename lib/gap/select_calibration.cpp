@@ -1,4 +1,5 @@
-// The rule on a kept effect and the effects along the calibration (select.h, AlongCalibration).
+// The rule on a kept effect and the effects along the calibration (select.h, AlongCalibration),
+// and the selection read beside such an effect against their joint simulation (SimulatedBeside).
 #include <algorithm>
 #include <cmath>
 #include <exception>
