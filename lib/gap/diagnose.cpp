@@ -497,7 +497,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         // moved it from 0.11 to 0.139 px (0.15 injected, seed 1002), the second to 0.137, a
         // third nowhere.
         const ModelFit with = SimulatedBeside(model.JointWindow(), current, e.fit, all, base,
-                                              params.simulate, 2, &r.simulations);
+                                              params.simulate, 2, &r.simulations,
+                                              &a.selection_with_rounds);
         if (with.success) a.selection_with = with.terms;  // the named effect last
       }
       r.ambiguous.push_back(std::move(a));

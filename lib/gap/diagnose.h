@@ -254,6 +254,9 @@ struct Ambiguity {
   // median as an offset of rate·T/2 would, which an offset selected beside σ_d takes in. Empty
   // otherwise.
   std::vector<TermFit> selection_with;
+  // The rounds selection_with was read against the terms' joint simulation (select.h,
+  // SimulatedBeside); 0: the model's sum of their departures alone (the simulation failed).
+  int selection_with_rounds = 0;
 };
 
 // The rest of the gap no registered effect earns (open world).

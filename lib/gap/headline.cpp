@@ -38,6 +38,8 @@ std::string WithText(const DiagnoseResult& r, const Ambiguity& a) {
     s += s.empty() ? "; were it " + a.effects[0] + ", the selection beside it would read " : ", ";
     s += c.effect + " " + SizeText(c, t);
   }
+  if (!s.empty() && a.selection_with_rounds == 0)
+    s += " (their departures added: their joint simulation failed)";
   return s;
 }
 

@@ -212,7 +212,8 @@ void OpenWorldJson(JsonWriter& w, const DiagnoseResult& r) {
     w.EndArray().Number("correlation", a.correlation);
     if (!a.selection_with.empty()) w.BeginObject("selection_with");  // effects[0] the cause
     for (const TermFit& t : a.selection_with) ParamsJson(w, CandidateOf(r, t).effect, r, t, false);
-    if (!a.selection_with.empty()) w.EndObject();
+    if (!a.selection_with.empty())  // rounds against their joint simulation; 0: not simulated
+      w.EndObject().Number("selection_with_rounds", a.selection_with_rounds);
     (a.why.empty() ? w : w.String("why", a.why)).EndObject();
   }
   w.EndArray().BeginArray("not_kept");

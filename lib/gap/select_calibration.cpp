@@ -27,6 +27,28 @@ bool AtNeutral(const Candidate& candidate, TermFit* kept) {
   return absent;
 }
 
+// A grouped term read as one shared set, started from its groups' mean. False where it is shared
+// already or holds a discrete node (a width fitted per group is not averaged).
+bool AsShared(TermFit* t) {
+  if (t->term.scope == Scope::kShared || t->values.empty()) return false;
+  for (const auto& row : t->term.discrete_node)
+    for (int node : row)
+      if (node >= 0) return false;
+  std::vector<double> mean(t->values[0].size(), 0.0);
+  int used = 0;
+  for (size_t g = 0; g < t->values.size(); ++g) {
+    if (g < t->group_used.size() && !t->group_used[g]) continue;
+    for (size_t a = 0; a < mean.size(); ++a) mean[a] += t->values[g][a];
+    ++used;
+  }
+  if (!used) return false;
+  for (double& v : mean) v /= used;
+  t->term.scope = Scope::kShared;
+  t->term.discrete_node.resize(1);
+  t->values = {mean};
+  return true;
+}
+
 }  // namespace
 
 std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
@@ -99,8 +121,25 @@ std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
 
 ModelFit SimulatedBeside(const GapModel& model, const ModelFit& fit, const TermFit& beside,
                          const std::vector<char>& train, const sim::SimParams& base,
-                         const SimulateOptions& options, int rounds, int* runs) {
-  ModelFit with = FitBeside(model, fit, beside, train);
+                         const SimulateOptions& options, int rounds, int* runs, int* done) {
+  ModelFit base_fit = fit;
+  TermFit named = beside;
+  ModelFit with = FitBeside(model, base_fit, named, train);
+  // Each term's scope read again beside the named effect: a term the selection took per light
+  // or per scenario alone is read shared where that fits as well by BIC (the fewer groups win a
+  // tie). Alone, a per-light offset can carry what a drift beside it explains (seeds 5, 1108).
+  const double log_n = std::log(static_cast<double>(std::max(with.num_obs, 2)));
+  auto bic = [&](const ModelFit& f) { return f.Deviance() + f.num_params * log_n; };
+  for (size_t j = 0; with.success && j <= base_fit.terms.size(); ++j) {
+    ModelFit alt_fit = base_fit;
+    TermFit alt_named = named;
+    if (!AsShared(j < base_fit.terms.size() ? &alt_fit.terms[j] : &alt_named)) continue;
+    ModelFit alt = FitBeside(model, alt_fit, alt_named, train);
+    if (!alt.success || bic(alt) > bic(with)) continue;
+    base_fit = std::move(alt_fit);
+    named = std::move(alt_named);
+    with = std::move(alt);
+  }
   const int phases = options.lateral_phase_px > 0 ? 2 : 1;  // SimulateSelection's runs
   for (int i = 0; i < rounds && with.success; ++i) {
     std::vector<double> c;
@@ -113,12 +152,13 @@ ModelFit SimulatedBeside(const GapModel& model, const ModelFit& fit, const TermF
     *runs += phases;
     const std::vector<double> mu = model.Predict(with);
     for (size_t o = 0; o < c.size(); ++o) c[o] -= mu[o];
-    ModelFit start = fit;  // the fit with `beside` removed, as FitBeside takes it
+    ModelFit start = base_fit;  // the fit with the named effect removed, as FitBeside takes it
     start.terms.assign(with.terms.begin(), with.terms.end() - 1);
     start.nuisance = with.nuisance;
     ModelFit next = FitBeside(model.Shifted(c), start, with.terms.back(), train);
     if (!next.success) break;
     with = std::move(next);
+    if (done) ++*done;
   }
   return with;
 }
