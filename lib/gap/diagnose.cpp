@@ -496,8 +496,8 @@ DiagnoseResult DiagnoseWith(const Design& design, const Simulations& sims,
         // Two rounds against the simulated selection: on an offset beside a drift the first
         // moved it from 0.11 to 0.139 px (0.15 injected, seed 1002), the second to 0.137, a
         // third nowhere.
-        const ModelFit with = SimulatedBeside(model.JointWindow(), current, e.fit, all, base,
-                                              params.simulate, 2, &r.simulations,
+        const ModelFit with = SimulatedBeside(model.JointWindow(), current, e.fit, all, fold,
+                                              r.folds, base, params.simulate, 2, &r.simulations,
                                               &a.selection_with_rounds);
         if (with.success) a.selection_with = with.terms;  // the named effect last
       }

@@ -118,17 +118,19 @@ bool KeepSteps(const GapModel& model, const ModelFit& m0, const std::vector<char
 std::string SizeText(const Candidate& candidate, const TermFit& term);
 
 // The selection `fit` refitted with `beside` added (FitBeside on `model`, the window at their
-// joint depth; each grouped term, `beside` too, refitted shared and kept so where its BIC is no
-// higher), then read again against what the simulator gives for them together: the terms
-// are simulated at their fitted values (SimulateSelection), the difference from the model's
-// own prediction there is taken off the data (GapModel::Shifted), and they are refitted;
-// `rounds` times. The model adds the terms' departures, simulated one at a time, and moves the
-// window once for all; where their joint response is not that sum (an offset beside a drift
-// near the depth where the window outgrows the panel), the first fit reads the sizes off it.
-// `runs` gains the simulations of the table made. On a failed simulation or refit, the last fit;
-// `done` (when given) the rounds completed.
+// joint depth; each grouped term, `beside` too, refitted shared and kept so unless its groups
+// earn both ways, as the selection's scopes do: by BIC and held out over `fold`), then read
+// again against what the simulator gives for them together: the terms are simulated at their
+// fitted values (SimulateSelection), the difference from the model's own prediction there is
+// taken off the data (GapModel::Shifted), and they are refitted; `rounds` times. The model adds
+// the terms' departures, simulated one at a time, and moves the window once for all; where
+// their joint response is not that sum (an offset beside a drift near the depth where the
+// window outgrows the panel), the first fit reads the sizes off it. `runs` gains the
+// simulations of the table made. On a failed simulation or refit, the last fit; `done` (when
+// given) the rounds completed.
 ModelFit SimulatedBeside(const GapModel& model, const ModelFit& fit, const TermFit& beside,
-                         const std::vector<char>& train, const sim::SimParams& base,
+                         const std::vector<char>& train, const std::vector<int>& fold,
+                         int num_folds, const sim::SimParams& base,
                          const SimulateOptions& options, int rounds, int* runs,
                          int* done = nullptr);
 

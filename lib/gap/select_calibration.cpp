@@ -120,22 +120,33 @@ std::vector<char> AlongCalibration(const GapModel& model, const ModelFit& m0,
 }
 
 ModelFit SimulatedBeside(const GapModel& model, const ModelFit& fit, const TermFit& beside,
-                         const std::vector<char>& train, const sim::SimParams& base,
+                         const std::vector<char>& train, const std::vector<int>& fold,
+                         int num_folds, const sim::SimParams& base,
                          const SimulateOptions& options, int rounds, int* runs, int* done) {
   ModelFit base_fit = fit;
   TermFit named = beside;
   ModelFit with = FitBeside(model, base_fit, named, train);
-  // Each term's scope read again beside the named effect: a term the selection took per light
-  // or per scenario alone is read shared where that fits as well by BIC (the fewer groups win a
-  // tie). Alone, a per-light offset can carry what a drift beside it explains (seeds 5, 1108).
+  // Each term's scope read again beside the named effect, by the selection's own rule on a
+  // scope (select.cpp): its groups only where they are the best by BIC (the fewer win a tie) and
+  // beat the shared fit on the held-out cells by more than one standard error. Alone, a
+  // per-light offset can carry what a drift beside it explains (seeds 5, 1108).
   const double log_n = std::log(static_cast<double>(std::max(with.num_obs, 2)));
   auto bic = [&](const ModelFit& f) { return f.Deviance() + f.num_params * log_n; };
+  auto held_out = [&](const ModelFit& f) {
+    std::vector<Term> terms;
+    for (const TermFit& t : f.terms) terms.push_back(t.term);
+    return CrossValidate(model, terms, fold, num_folds, f, train);
+  };
   for (size_t j = 0; with.success && j <= base_fit.terms.size(); ++j) {
     ModelFit alt_fit = base_fit;
     TermFit alt_named = named;
     if (!AsShared(j < base_fit.terms.size() ? &alt_fit.terms[j] : &alt_named)) continue;
     ModelFit alt = FitBeside(model, alt_fit, alt_named, train);
-    if (!alt.success || bic(alt) > bic(with)) continue;
+    if (!alt.success) continue;
+    if (bic(alt) > bic(with)) {
+      const HeldOut grouped = held_out(with), shared = held_out(alt);
+      if (grouped.success && (!shared.success || BeatsByOneSe(model, grouped, shared))) continue;
+    }
     base_fit = std::move(alt_fit);
     named = std::move(alt_named);
     with = std::move(alt);

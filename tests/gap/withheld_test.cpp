@@ -907,8 +907,8 @@ TEST(Cases, AnOffsetBesideADriftIsReadAgainstTheirJointSimulation) {
 
 // The same case at seed 1108: alone, the offset is taken per light (0.30 px in daylight, 0.22 at
 // sunset), and refitted per light beside the drift it read 0.182 px in daylight, 21 % high.
-// Beside the drift each term's scope is read again (SimulatedBeside): one offset fits as well by
-// BIC there, and shared it reads 0.163 px.
+// Beside the drift each term's scope is read again (SimulatedBeside, by the selection's rule on
+// a scope): the two values no longer earn by BIC there, and shared the offset reads 0.163 px.
 TEST(Cases, AnOffsetBesideADriftIsReadSharedWhereOneValueFitsAsWell) {
   const std::vector<CaseOutcome> out = OneCase("disparity_offset + temporal_drift", 1108);
   ASSERT_EQ(out.size(), 1u);
